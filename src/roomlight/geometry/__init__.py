@@ -1,0 +1,27 @@
+"""Spherical geometry: the equirectangular convention, projections, padding and rotations."""
+
+from roomlight.geometry.equirect import (
+    check_equirect_shape,
+    direction_to_uv,
+    latitude_channels,
+    pixel_directions,
+    pixel_solid_angles,
+    pixel_uv,
+    sample_equirect,
+    uv_to_direction,
+)
+from roomlight.geometry.padding import SphericalPad, spherical_pad
+from roomlight.geometry.projection import (
+    camera_basis,
+    panorama_to_perspective,
+    perspective_directions,
+    perspective_to_panorama,
+)
+from roomlight.geometry.rotation import rotate_panorama, rotation_matrix
+
+__all__ = [
+    "check_equirect_shape", "direction_to_uv", "latitude_channels", "pixel_directions",
+    "pixel_solid_angles", "pixel_uv", "sample_equirect", "uv_to_direction",
+    "SphericalPad", "spherical_pad", "camera_basis", "panorama_to_perspective",
+    "perspective_directions", "perspective_to_panorama", "rotate_panorama", "rotation_matrix",
+]

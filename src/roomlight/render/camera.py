@@ -1,0 +1,36 @@
+"""Sensors: Mitsuba perspective cameras from origin / look-at / fov, and equirectangular rays."""
+
+from __future__ import annotations
+
+from roomlight.errors import RoomlightError
+from roomlight.render.variant import mitsuba
+
+__all__ = ["perspective_sensor"]
+
+
+def perspective_sensor(origin=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0),
+                       fov_deg: float = 65.0, width: int = 256, height: int = 256,
+                       pixel_filter: str = "box") -> dict:
+    """Mitsuba ``perspective`` sensor dict (horizontal ``fov_deg``, ``hdrfilm`` RGB output).
+
+    A box pixel filter is the default so that each pixel integrates only its own footprint
+    (no blur across pixels), which makes renders comparable to direct resampling.
+    """
+    mi = mitsuba()
+    if not 0.0 < fov_deg < 180.0:
+        raise RoomlightError(f"camera: fov must be in (0, 180) degrees, got {fov_deg}")
+    if width <= 0 or height <= 0:
+        raise RoomlightError(f"camera: resolution must be positive, got {width}x{height}")
+    if tuple(map(float, origin)) == tuple(map(float, target)):
+        raise RoomlightError("camera: origin and look-at target coincide")
+    return {
+        "type": "perspective",
+        "fov": float(fov_deg),
+        "fov_axis": "x",
+        "to_world": mi.ScalarTransform4f().look_at(origin=list(map(float, origin)),
+                                                   target=list(map(float, target)),
+                                                   up=list(map(float, up))),
+        "film": {"type": "hdrfilm", "width": int(width), "height": int(height), "pixel_format": "rgb",
+                 "rfilter": {"type": pixel_filter}},
+        "sampler": {"type": "independent"},
+    }

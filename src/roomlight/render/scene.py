@@ -1,0 +1,155 @@
+"""A Mitsuba scene around one roomlight emitter, updated in place between renders.
+
+The emitter is one of three kinds (the paper's representations):
+
+- ``mesh``:   the 2.5D area light; depth moves the vertices, radiance is its texture.
+- ``sphere``: the same mesh at a constant radius (a sphere proxy); depth is ignored.
+- ``envmap``: the radiance at infinity (Mitsuba ``envmap``), resampled to its row layout.
+
+Topology, UVs and the Mitsuba objects are created once; :meth:`EmitterScene.set_emitter`
+only writes new vertex positions / texture values through ``mi.traverse`` and calls
+``params.update()``, so no scene is reloaded between renders or optimisation steps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from roomlight.emitter.area_light import area_light_topology, area_light_vertices
+from roomlight.emitter.envmap import envmap_data, envmap_rows
+from roomlight.emitter.sphere import sphere_depth
+from roomlight.errors import RoomlightError, ShapeError
+from roomlight.render.tensors import from_mitsuba_tensor, to_mitsuba_tensor
+from roomlight.render.variant import mitsuba
+
+__all__ = ["EmitterKind", "parse_emitter_kind", "EmitterScene", "EMITTER_ID"]
+
+EMITTER_ID = "emitter"
+
+
+@dataclass(frozen=True)
+class EmitterKind:
+    """Which representation shows the radiance: ``mesh``, ``envmap`` or ``sphere`` (with radius)."""
+
+    name: str
+    radius: float | None = None
+
+    def __str__(self) -> str:
+        return f"sphere:{self.radius:g}" if self.name == "sphere" else self.name
+
+
+def parse_emitter_kind(text: str | EmitterKind) -> EmitterKind:
+    """Parse ``mesh``, ``envmap`` or ``sphere:R`` (R in scene units)."""
+    if isinstance(text, EmitterKind):
+        return text
+    name, _, arg = str(text).partition(":")
+    if name in ("mesh", "envmap") and not arg:
+        return EmitterKind(name)
+    if name == "sphere":
+        try:
+            r = float(arg)
+        except ValueError:
+            r = float("nan")
+        if r > 0:
+            return EmitterKind("sphere", r)
+        raise RoomlightError(f"emitter kind {text!r}: a sphere needs a positive radius, e.g. 'sphere:3.5'")
+    raise RoomlightError(f"emitter kind {text!r}: expected 'mesh', 'envmap' or 'sphere:R'")
+
+
+def _texture_dict(mi, radiance_hwc: np.ndarray) -> dict:
+    # raw=True keeps the float data as linear radiance (no colour-space conversion); repeat
+    # wrapping resolves the seam column's u = 1 + 0.5/W to texel 0.
+    return {"type": "bitmap", "data": mi.TensorXf(radiance_hwc), "raw": True,
+            "filter_type": "bilinear", "wrap_mode": "repeat"}
+
+
+class EmitterScene:
+    """A scene with one roomlight emitter (shape id ``emitter``) plus optional objects.
+
+    Args:
+        kind: ``mesh``, ``envmap``, ``sphere:R`` or an :class:`EmitterKind`.
+        resolution: (H, W) of the radiance (and depth) maps this scene will receive.
+        objects: extra scene entries (Mitsuba dicts or instantiated objects), keyed by id.
+        sensor: a Mitsuba sensor dict (see :mod:`roomlight.render.camera`), or None.
+        integrator: a Mitsuba integrator dict; default ``prb`` with max depth 4 (the paper's).
+    """
+
+    def __init__(self, kind="mesh", resolution=(128, 256), objects: dict | None = None,
+                 sensor: dict | None = None, integrator: dict | None = None):
+        self.mi = mi = mitsuba()
+        self.kind = parse_emitter_kind(kind)
+        h, w = resolution
+        if w != 2 * h:
+            raise ShapeError(f"EmitterScene: resolution must be H x 2H, got {h}x{w}")
+        self.resolution = (h, w)
+        gray = np.full((h, w, 3), 1.0, np.float32)
+        scene: dict = {"type": "scene"}
+        if integrator is None:
+            integrator = {"type": "prb", "max_depth": 4}
+        scene["integrator"] = integrator
+        if sensor is not None:
+            scene["sensor"] = sensor
+        if self.kind.name == "envmap":
+            data = np.full((envmap_rows(h), w, 3), 1.0, np.float32)
+            scene[EMITTER_ID] = {"type": "envmap", "bitmap": mi.Bitmap(data)}
+            self._tex_key = f"{EMITTER_ID}.data"
+            self._pos_key = None
+        else:
+            topo = area_light_topology(h, w)
+            props = mi.Properties()
+            props["emitter"] = mi.load_dict({"type": "area", "radiance": _texture_dict(mi, gray)})
+            mesh = mi.Mesh(EMITTER_ID, topo.vertex_count, topo.face_count, props,
+                           has_vertex_normals=False, has_vertex_texcoords=True)
+            mp = mi.traverse(mesh)
+            depth0 = sphere_depth(h, w, self.kind.radius or 1.0, torch.float32)
+            mp["vertex_positions"] = mi.Float(area_light_vertices(depth0).numpy().ravel())
+            mp["faces"] = mi.UInt(topo.faces.numpy().astype(np.uint32).ravel())
+            mp["vertex_texcoords"] = mi.Float(topo.uv.numpy().ravel())
+            mp.update()
+            scene[EMITTER_ID] = mesh
+            self._tex_key = f"{EMITTER_ID}.emitter.radiance.data"
+            self._pos_key = f"{EMITTER_ID}.vertex_positions"
+        for key, value in (objects or {}).items():
+            if key in scene:
+                raise RoomlightError(f"EmitterScene: object id {key!r} is reserved")
+            scene[key] = value
+        self.scene = mi.load_dict(scene)
+        self.params = mi.traverse(self.scene)
+
+    # -- conversions torch -> the values stored in the scene (differentiable in torch) ----------
+    def texture_value(self, radiance: torch.Tensor) -> torch.Tensor:
+        """(H, W, 3) radiance -> the tensor the emitter's texture parameter holds."""
+        if tuple(radiance.shape) != (*self.resolution, 3):
+            raise ShapeError(f"EmitterScene: expected radiance {(*self.resolution, 3)}, got {tuple(radiance.shape)}")
+        return envmap_data(radiance) if self.kind.name == "envmap" else radiance
+
+    def vertex_value(self, depth: torch.Tensor | None, like: torch.Tensor) -> torch.Tensor | None:
+        """(H, W) depth -> flat (3N,) vertex positions, or None for the env map."""
+        if self._pos_key is None:
+            return None
+        if self.kind.name == "sphere" or depth is None:
+            if self.kind.name == "mesh":
+                raise RoomlightError("EmitterScene: a 'mesh' emitter needs a depth map")
+            depth = sphere_depth(*self.resolution, self.kind.radius, like.dtype, like.device)
+        if tuple(depth.shape[-2:]) != self.resolution:
+            raise ShapeError(f"EmitterScene: expected depth {self.resolution}, got {tuple(depth.shape)}")
+        return area_light_vertices(depth.reshape(self.resolution)).reshape(-1)
+
+    # -- in-place updates and plain (non-differentiable) rendering ---------------------------
+    def set_emitter(self, radiance: torch.Tensor, depth: torch.Tensor | None = None) -> None:
+        """Write new radiance (H, W, 3) and depth (H, W) into the scene, without reloading it."""
+        mi = self.mi
+        with torch.no_grad():
+            self.params[self._tex_key] = to_mitsuba_tensor(self.texture_value(radiance.float()))
+            verts = self.vertex_value(depth.float() if depth is not None else None, radiance)
+            if verts is not None:
+                self.params[self._pos_key] = mi.Float(verts.numpy())
+        self.params.update()
+
+    def render(self, spp: int = 64, seed: int = 0, sensor: int | object = 0) -> torch.Tensor:
+        """Render the current scene; returns (H, W, 3) float32 linear radiance on the CPU."""
+        img = self.mi.render(self.scene, spp=spp, seed=seed, sensor=sensor)
+        return from_mitsuba_tensor(img)[..., :3]

@@ -1,0 +1,94 @@
+"""Choosing and activating the Mitsuba variant (DESIGN.md §5).
+
+The choice is made in one function, on first use, never at import time: ``cuda_ad_rgb`` when a
+CUDA device is usable, else ``llvm_ad_rgb`` (CPU). ``ROOMLIGHT_VARIANT`` overrides it.
+
+Dr.Jit >= 1.5 needs LLVM >= 16 for its CPU backend. With LLVM 15 the process *aborts* inside
+LLVM (``Cannot select ... fminimum``) on the first kernel, so the version is checked before the
+variant is activated and an actionable :class:`BackendError` is raised instead.
+"""
+
+from __future__ import annotations
+
+import os
+
+from roomlight.errors import BackendError
+
+__all__ = ["MIN_LLVM", "llvm_status", "cuda_available", "choose_variant", "ensure_variant", "mitsuba"]
+
+MIN_LLVM = (16, 0, 0)
+LLVM_FIX = (
+    "install LLVM 16 or newer, e.g. `apt-get install libllvm19` (or run `make setup`); "
+    "if it lives in a non-standard place set DRJIT_LIBLLVM_PATH=/path/to/libLLVM.so"
+)
+
+_active: str | None = None
+
+
+def llvm_status() -> tuple[bool, str]:
+    """(usable, description) of Dr.Jit's CPU backend, without risking an LLVM abort."""
+    import drjit as dr
+
+    version = tuple(dr.detail.llvm_version())
+    if version[0] < 0:
+        return False, "Dr.Jit found no usable libLLVM (" + LLVM_FIX + ")"
+    text = ".".join(str(v) for v in version)
+    if version < MIN_LLVM:
+        return False, f"libLLVM {text} is too old for Dr.Jit's CPU backend (needs >= 16; {LLVM_FIX})"
+    return True, f"libLLVM {text}"
+
+
+def cuda_available() -> bool:
+    """True when Dr.Jit can drive a CUDA device."""
+    import drjit as dr
+
+    try:
+        return bool(dr.has_backend(dr.JitBackend.CUDA))
+    except Exception:  # pragma: no cover - depends on the driver
+        return False
+
+
+def choose_variant(prefer: str | None = None) -> str:
+    """Name of the Mitsuba variant to use: ``prefer``, ``$ROOMLIGHT_VARIANT``, CUDA, else LLVM.
+
+    Raises :class:`BackendError` when no differentiable backend can run here.
+    """
+    want = prefer or os.environ.get("ROOMLIGHT_VARIANT") or None
+    if want in (None, "", "auto"):
+        if cuda_available():
+            return "cuda_ad_rgb"
+        want = "llvm_ad_rgb"
+    if want.startswith("llvm"):
+        ok, why = llvm_status()
+        if not ok:
+            raise BackendError(f"Mitsuba variant {want!r} cannot start: {why}")
+    elif want.startswith("cuda") and not cuda_available():
+        raise BackendError(f"Mitsuba variant {want!r} needs a CUDA GPU and driver, and none is usable here")
+    return want
+
+
+def ensure_variant(prefer: str | None = None) -> str:
+    """Activate (once) and return the Mitsuba variant; later calls return the active one.
+
+    A different explicit ``prefer`` after activation switches variants (objects built under the
+    old variant must not be mixed with the new one).
+    """
+    global _active
+    import mitsuba as mi
+
+    if _active is not None and (prefer is None or prefer == _active):
+        return _active
+    name = choose_variant(prefer)
+    if name not in mi.variants():
+        raise BackendError(f"this Mitsuba build has no variant {name!r}; available: {', '.join(mi.variants())}")
+    mi.set_variant(name)
+    _active = name
+    return name
+
+
+def mitsuba():
+    """The ``mitsuba`` module with a differentiable variant active (see :func:`ensure_variant`)."""
+    import mitsuba as mi
+
+    ensure_variant()
+    return mi
