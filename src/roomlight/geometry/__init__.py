@@ -10,6 +10,7 @@ from roomlight.geometry.equirect import (
     sample_equirect,
     uv_to_direction,
 )
+from roomlight.geometry.analytic import box_distance, box_room_depth
 from roomlight.geometry.padding import SphericalPad, spherical_pad
 from roomlight.geometry.projection import (
     camera_basis,
@@ -20,6 +21,7 @@ from roomlight.geometry.projection import (
 from roomlight.geometry.rotation import rotate_panorama, rotation_matrix
 
 __all__ = [
+    "box_distance", "box_room_depth",
     "check_equirect_shape", "direction_to_uv", "latitude_channels", "pixel_directions",
     "pixel_solid_angles", "pixel_uv", "sample_equirect", "uv_to_direction",
     "SphericalPad", "spherical_pad", "camera_basis", "panorama_to_perspective",

@@ -17,7 +17,7 @@ __all__ = ["render_differentiable"]
 
 def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: torch.Tensor | None = None,
                           spp: int = 16, seed: int = 0, seed_grad: int | None = None,
-                          sensor: int = 0) -> torch.Tensor:
+                          spp_grad: int | None = None, sensor: int = 0) -> torch.Tensor:
     """Differentiable render of ``escene`` lit by (radiance, depth).
 
     Args:
@@ -27,9 +27,9 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
         depth: (H, W) radial depth in scene units (ignored by ``envmap``/``sphere``).
         spp: samples per pixel of the primal render.
         seed: primal seed; vary it per optimisation step to decorrelate the noise.
-        seed_grad: seed of the adjoint pass (default ``seed + 1``, which keeps the gradient
-            independent of the primal noise; pass ``seed`` to differentiate the very estimator
-            that produced the image, e.g. to compare with finite differences).
+        seed_grad: seed of the adjoint pass (default ``seed + 1``). Mitsuba requires it to differ
+            from ``seed`` so that the gradient's noise is independent of the primal's.
+        spp_grad: samples per pixel of the adjoint pass (default ``spp``).
         sensor: index of the scene's sensor to render.
     Returns:
         (H_img, W_img, 3) float32 linear image, attached to torch's autograd graph.
@@ -48,7 +48,8 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
         if verts_dr is not None:
             params[escene._pos_key] = verts_dr.array
         params.update()
-        return mi.render(escene.scene, params, spp=spp, seed=seed, seed_grad=seed_grad, sensor=sensor)
+        return mi.render(escene.scene, params, spp=spp, seed=seed, seed_grad=seed_grad,
+                         spp_grad=spp_grad or spp, sensor=sensor)
 
     img = _render(tex, verts)
     return img[..., :3]

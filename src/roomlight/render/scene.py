@@ -101,6 +101,9 @@ class EmitterScene:
             topo = area_light_topology(h, w)
             props = mi.Properties()
             props["emitter"] = mi.load_dict({"type": "area", "radiance": _texture_dict(mi, gray)})
+            # The emitter is a light source only: a black BSDF keeps it from reflecting light
+            # (Mitsuba's default would be a 50 % grey diffuse surface that adds bounce light).
+            props["bsdf"] = mi.load_dict({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}})
             mesh = mi.Mesh(EMITTER_ID, topo.vertex_count, topo.face_count, props,
                            has_vertex_normals=False, has_vertex_texcoords=True)
             mp = mi.traverse(mesh)

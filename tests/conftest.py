@@ -1,0 +1,21 @@
+import os
+
+import numpy as np
+import pytest
+import torch
+
+# Two cores on CI: keep torch from oversubscribing them next to Dr.Jit's own thread pool.
+torch.set_num_threads(max(1, min(2, os.cpu_count() or 1)))
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(1234)
+
+
+@pytest.fixture(scope="session")
+def mi():
+    """The mitsuba module with roomlight's variant active (LLVM on CPU machines)."""
+    from roomlight.render.variant import mitsuba
+
+    return mitsuba()
