@@ -1,0 +1,22 @@
+"""Training losses of the prior (paper §3.3, eq. 3-6); pure functions on (B, C, H, W) tensors.
+
+- :func:`l1_loss`         pixel-wise L1 (z-scored domain)
+- :func:`gradient_loss`   multi-scale normalised Scharr gradients with spherical padding
+- :func:`peak_loss`       log-L1 over the brightest 0.5 % of pixels (linear radiance)
+- :func:`kl_divergence`   closed-form KL to N(0, I); :func:`kl_weight` its annealing
+- :func:`vae_loss`        the weighted sum, returning every term
+"""
+
+from __future__ import annotations
+
+from roomlight.losses.gradient import SCHARR_U, SCHARR_V, gradient_loss, scharr_gradients
+from roomlight.losses.kl import kl_divergence, kl_weight
+from roomlight.losses.l1 import l1_loss
+from roomlight.losses.peak import luminance, peak_loss, peak_mask, top_fraction_mask
+from roomlight.losses.total import LossConfig, vae_loss
+
+__all__ = [
+    "l1_loss", "gradient_loss", "scharr_gradients", "SCHARR_U", "SCHARR_V", "peak_loss",
+    "peak_mask", "top_fraction_mask", "luminance", "kl_divergence", "kl_weight", "LossConfig",
+    "vae_loss",
+]

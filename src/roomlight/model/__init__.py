@@ -1,0 +1,30 @@
+"""The illumination prior: a panoramic VAE over HDR radiance + radial depth (paper §3.2-3.3).
+
+- :class:`ModelConfig` / :func:`get_preset`  architecture (``default`` is the paper's network)
+- :class:`PanoVAE`                         the network, encode/decode, checkpoints
+- :class:`Normalization`                   log transforms + dataset statistics
+- :class:`DiagonalGaussian`                the posterior q(z | x)
+- :func:`convert_authors_checkpoint`       the authors' ``config.yaml`` + ``.pth`` -> safetensors
+
+See docs/model.md.
+"""
+
+from __future__ import annotations
+
+from roomlight.model.config import PRESETS, ModelConfig, get_preset
+from roomlight.model.convert import (
+    AUTHORS_NORMALIZATION,
+    ThirdPartyCheckpointWarning,
+    convert_authors_checkpoint,
+    from_authors_state_dict,
+    to_authors_state_dict,
+)
+from roomlight.model.distributions import DiagonalGaussian
+from roomlight.model.normalization import Normalization
+from roomlight.model.panovae import Decoder, Encoder, PanoVAE
+
+__all__ = [
+    "ModelConfig", "PRESETS", "get_preset", "PanoVAE", "Encoder", "Decoder", "Normalization",
+    "DiagonalGaussian", "AUTHORS_NORMALIZATION", "ThirdPartyCheckpointWarning",
+    "convert_authors_checkpoint", "from_authors_state_dict", "to_authors_state_dict",
+]

@@ -1,0 +1,134 @@
+"""Building blocks of the panoramic VAE (paper §3.2, DESIGN.md §3).
+
+Every 3x3 convolution is *unpadded* and preceded by spherical padding, so features wrap in
+longitude and continue across the poles instead of seeing zeros. Sub-module names (``conv``,
+``norm1``, ``conv1.conv``, ``to_scale_shift`` ...) are chosen to coincide with the authors'
+state_dict layout inside each block; only the top-level prefixes differ (see
+:mod:`roomlight.model.convert`).
+
+All feature maps are (B, C, H, W) equirectangular with even W.
+"""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from roomlight.geometry.padding import SphericalPad
+
+__all__ = [
+    "SphericalConv2d",
+    "ResBlock",
+    "AdaGN",
+    "AdaGNResBlock",
+    "Downsample",
+    "Upsample",
+]
+
+
+class SphericalConv2d(nn.Module):
+    """3x3 convolution with one pixel of spherical padding.
+
+    (B, C_in, H, W) -> (B, C_out, H / stride, W / stride). With stride 2 this is the encoder's
+    downsampling conv: output pixel (i, j) sees input rows 2i-1..2i+1, so rolling the input by an
+    even number of columns 2k rolls the output by k.
+    """
+
+    def __init__(self, in_channels: int, out_channels: int, stride: int = 1):
+        super().__init__()
+        self.pad = SphericalPad(1)
+        self.conv = nn.Conv2d(in_channels, out_channels, kernel_size=3, stride=stride, padding=0)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.conv(self.pad(x))
+
+
+class Downsample(SphericalConv2d):
+    """Stride-2 spherically padded 3x3 conv: (B, C_in, H, W) -> (B, C_out, H/2, W/2)."""
+
+    def __init__(self, in_channels: int, out_channels: int):
+        super().__init__(in_channels, out_channels, stride=2)
+
+
+class Upsample(nn.Module):
+    """Nearest-neighbour x2 upsampling followed by a padded 3x3 conv.
+
+    (B, C_in, H, W) -> (B, C_out, 2H, 2W). Nearest (not bilinear) keeps the operation exactly
+    equivariant to longitude rolls and matches the authors' network.
+    """
+
+    def __init__(self, in_channels: int, out_channels: int):
+        super().__init__()
+        self.conv = SphericalConv2d(in_channels, out_channels)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.conv(F.interpolate(x, scale_factor=2.0, mode="nearest"))
+
+
+class ResBlock(nn.Module):
+    """Pre-activation residual block: x + conv2(SiLU(GN2(conv1(SiLU(GN1(x)))))).
+
+    Channel count is unchanged, so the skip is the identity. (B, C, H, W) -> (B, C, H, W).
+    Norms are affine GroupNorms with ``eps`` (1e-6 in the authors' network). Modules are
+    registered norm1, norm2, conv1, conv2 to reproduce the authors' state_dict order.
+    """
+
+    def __init__(self, channels: int, groups: int, eps: float = 1e-6):
+        super().__init__()
+        self.norm1 = nn.GroupNorm(groups, channels, eps=eps)
+        self.norm2 = nn.GroupNorm(groups, channels, eps=eps)
+        self.conv1 = SphericalConv2d(channels, channels)
+        self.conv2 = SphericalConv2d(channels, channels)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h = self.conv1(F.silu(self.norm1(x)))
+        h = self.conv2(F.silu(self.norm2(h)))
+        return x + h
+
+
+class AdaGN(nn.Module):
+    """Adaptive GroupNorm: GN(x) * (1 + scale(z)) + shift(z).
+
+    The GroupNorm has no affine parameters; ``to_scale_shift`` is a Linear(latent_dim, 2 C) whose
+    output is (scale || shift). It is zero-initialised, so a fresh AdaGN is exactly a plain
+    GroupNorm and the latent's influence is learnt from there (as in the authors' network).
+
+    forward(x: (B, C, H, W), z: (B, latent_dim)) -> (B, C, H, W).
+    """
+
+    def __init__(self, channels: int, latent_dim: int, groups: int, eps: float = 1e-6):
+        super().__init__()
+        self.channels = channels
+        self.groups = groups
+        self.eps = eps
+        self.to_scale_shift = nn.Linear(latent_dim, 2 * channels)
+        nn.init.zeros_(self.to_scale_shift.weight)
+        nn.init.zeros_(self.to_scale_shift.bias)
+
+    def forward(self, x: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
+        h = F.group_norm(x, self.groups, eps=self.eps)
+        scale, shift = self.to_scale_shift(z).chunk(2, dim=1)
+        return h * (1.0 + scale[:, :, None, None]) + shift[:, :, None, None]
+
+    def extra_repr(self) -> str:
+        return f"channels={self.channels}, groups={self.groups}, eps={self.eps}"
+
+
+class AdaGNResBlock(nn.Module):
+    """:class:`ResBlock` whose two norms are :class:`AdaGN` conditioned on the latent z.
+
+    forward(x: (B, C, H, W), z: (B, latent_dim)) -> (B, C, H, W).
+    """
+
+    def __init__(self, channels: int, latent_dim: int, groups: int, eps: float = 1e-6):
+        super().__init__()
+        self.norm1 = AdaGN(channels, latent_dim, groups, eps)
+        self.norm2 = AdaGN(channels, latent_dim, groups, eps)
+        self.conv1 = SphericalConv2d(channels, channels)
+        self.conv2 = SphericalConv2d(channels, channels)
+
+    def forward(self, x: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
+        h = self.conv1(F.silu(self.norm1(x, z)))
+        h = self.conv2(F.silu(self.norm2(h, z)))
+        return x + h

@@ -1,0 +1,346 @@
+"""The panoramic convolutional VAE: the illumination prior (paper §3.2, DESIGN.md §3).
+
+A panorama of HDR radiance + radial depth is encoded into one global latent z (512-d by default)
+and decoded back. Shapes for the default config (B = batch):
+
+    encoder: x (B,4,128,256) ++ (cos θ, sin θ) -> stem 6->64 -> 4 x [stride-2 conv, ResBlock]
+             -> GN -> SiLU -> conv to 32 ch at 8x16 -> flatten 4096 -> Linear -> (mean ‖ logvar)
+    decoder: z (B,512) -> Linear -> 32x8x16 ++ (cos θ, sin θ) -> conv 34->256
+             -> 4 x [nearest x2 + conv, AdaGN ResBlock] -> AdaGN -> SiLU -> conv to 4 ch
+
+Checkpoints: :meth:`PanoVAE.save_pretrained` writes ``model.safetensors`` + ``config.json``;
+:meth:`PanoVAE.from_pretrained` reads that or the authors' run folder (see
+:mod:`roomlight.model.convert`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from roomlight.errors import InputFileError, RoomlightError, ShapeError
+from roomlight.geometry.equirect import latitude_channels
+from roomlight.model.blocks import AdaGN, AdaGNResBlock, Downsample, ResBlock, SphericalConv2d, Upsample
+from roomlight.model.config import ModelConfig
+from roomlight.model.distributions import DiagonalGaussian
+from roomlight.model.normalization import Normalization
+
+__all__ = ["Encoder", "Decoder", "PanoVAE", "WEIGHTS_NAME", "CONFIG_NAME", "FORMAT_NAME"]
+
+WEIGHTS_NAME = "model.safetensors"
+CONFIG_NAME = "config.json"
+#: ``format`` field of our config.json, so that other JSON files are not mistaken for one.
+FORMAT_NAME = "roomlight.panovae"
+FORMAT_VERSION = 1
+
+
+def _with_latitude(x: torch.Tensor) -> torch.Tensor:
+    """Append (cos θ, sin θ) at pixel centres: (B, C, H, W) -> (B, C + 2, H, W)."""
+    b, _, h, w = x.shape
+    lat = latitude_channels(h, w, dtype=x.dtype, device=x.device)
+    return torch.cat([x, lat.unsqueeze(0).expand(b, -1, -1, -1)], dim=1)
+
+
+class EncoderStage(nn.Module):
+    """Stride-2 padded conv followed by ``num_res_blocks`` ResBlocks: halves H and W."""
+
+    def __init__(self, c_in: int, c_out: int, num_res_blocks: int, groups: int, eps: float):
+        super().__init__()
+        self.down = Downsample(c_in, c_out)
+        self.blocks = nn.ModuleList(ResBlock(c_out, groups, eps) for _ in range(num_res_blocks))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        x = self.down(x)
+        for block in self.blocks:
+            x = block(x)
+        return x
+
+
+class DecoderStage(nn.Module):
+    """Nearest x2 upsample + padded conv, then ``num_res_blocks`` AdaGN ResBlocks."""
+
+    def __init__(self, c_in: int, c_out: int, num_res_blocks: int, latent_dim: int, groups: int,
+                 eps: float):
+        super().__init__()
+        self.up = Upsample(c_in, c_out)
+        self.blocks = nn.ModuleList(
+            AdaGNResBlock(c_out, latent_dim, groups, eps) for _ in range(num_res_blocks)
+        )
+
+    def forward(self, x: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
+        x = self.up(x)
+        for block in self.blocks:
+            x = block(x, z)
+        return x
+
+
+class Encoder(nn.Module):
+    """x (B, in_channels, H, W) z-scored -> posterior moments (B, 2 latent_dim) = (mean ‖ logvar).
+
+    The log-variance half is *not* clamped here; :class:`PanoVAE` clamps it.
+    """
+
+    def __init__(self, cfg: ModelConfig):
+        super().__init__()
+        chans = cfg.encoder_channels
+        self.stem = SphericalConv2d(cfg.in_channels + 2, chans[0])
+        self.stages = nn.ModuleList(
+            EncoderStage(chans[k], chans[k + 1], cfg.num_res_blocks, cfg.norm_groups, cfg.norm_eps)
+            for k in range(cfg.num_stages)
+        )
+        self.out_norm = nn.GroupNorm(cfg.norm_groups, chans[-1], eps=cfg.norm_eps)
+        self.out_conv = SphericalConv2d(chans[-1], cfg.z_channels)
+        self.to_moments = nn.Linear(cfg.bottleneck_features, 2 * cfg.latent_dim)
+
+    def feature_maps(self, x: torch.Tensor) -> list[torch.Tensor]:
+        """Every intermediate map: [stem, stage 1, ..., stage S, bottleneck (B, z_ch, h, w)].
+
+        All of these are equivariant to longitude rolls (by multiples of the downsampling
+        factor); only the final linear layer is not.
+        """
+        h = self.stem(_with_latitude(x))
+        maps = [h]
+        for stage in self.stages:
+            h = stage(h)
+            maps.append(h)
+        maps.append(self.out_conv(F.silu(self.out_norm(h))))
+        return maps
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h = self.feature_maps(x)[-1]
+        # Flatten in (C, H, W) order, as the authors' checkpoint expects.
+        return self.to_moments(h.flatten(1))
+
+
+class Decoder(nn.Module):
+    """z (B, latent_dim) -> x_hat (B, in_channels, H, W) in the z-scored domain.
+
+    z enters twice: through ``from_latent`` (Linear to the 8x16 starting map) and through every
+    AdaGN, which gives all scales direct access to the global code.
+    """
+
+    def __init__(self, cfg: ModelConfig):
+        super().__init__()
+        self.cfg = cfg
+        chans = cfg.encoder_channels[::-1]  # e.g. [256, 256, 128, 64, 64]
+        self.from_latent = nn.Linear(cfg.latent_dim, cfg.bottleneck_features)
+        self.stem = SphericalConv2d(cfg.z_channels + 2, chans[0])
+        self.stages = nn.ModuleList(
+            DecoderStage(chans[k], chans[k + 1], cfg.num_res_blocks, cfg.latent_dim,
+                         cfg.norm_groups, cfg.norm_eps)
+            for k in range(cfg.num_stages)
+        )
+        self.out_norm = AdaGN(chans[-1], cfg.latent_dim, cfg.norm_groups, cfg.norm_eps)
+        self.out_conv = SphericalConv2d(chans[-1], cfg.in_channels)
+
+    def latent_to_map(self, z: torch.Tensor) -> torch.Tensor:
+        """(B, latent_dim) -> (B, z_channels, h, w) starting map, unflattened in (C, H, W) order."""
+        h, w = self.cfg.bottleneck_resolution
+        return self.from_latent(z).view(z.shape[0], self.cfg.z_channels, h, w)
+
+    def decode_map(self, h: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
+        """Convolutional part: starting map (B, z_ch, h, w) and z (B, D) -> (B, C, H, W).
+
+        Equivariant to rolling ``h`` in longitude (the output rolls by the upsampling factor).
+        """
+        x = self.stem(_with_latitude(h))
+        for stage in self.stages:
+            x = stage(x, z)
+        return self.out_conv(F.silu(self.out_norm(x, z)))  # no output activation
+
+    def forward(self, z: torch.Tensor) -> torch.Tensor:
+        return self.decode_map(self.latent_to_map(z), z)
+
+
+class PanoVAE(nn.Module):
+    """The prior. Holds its :class:`ModelConfig`, :class:`Normalization` and metadata.
+
+    Args:
+        config: architecture (default: the paper's network).
+        normalization: input statistics; required by :meth:`encode` / :meth:`decode` (the
+            ``*_normalized`` methods work without it).
+        metadata: free-form JSON-able facts saved with the checkpoint. ``depth_units`` is
+            ``"metres"`` for roomlight-trained models and ``"scale-free"`` for the authors'
+            checkpoint (their depth has unit geometric-mean radius).
+    """
+
+    def __init__(self, config: ModelConfig | None = None, normalization: Normalization | None = None,
+                 metadata: dict | None = None):
+        super().__init__()
+        self.config = config or ModelConfig()
+        self.normalization = normalization
+        self.metadata = {"depth_units": "metres", **(metadata or {})}
+        self.encoder = Encoder(self.config)
+        self.decoder = Decoder(self.config)
+
+    # ------------------------------------------------------------------ normalised domain
+    def _check_input(self, x: torch.Tensor, channels: int, what: str) -> None:
+        h, w = self.config.resolution
+        if x.dim() != 4 or x.shape[1] != channels or tuple(x.shape[-2:]) != (h, w):
+            raise ShapeError(
+                f"{what}: expected shape (B, {channels}, {h}, {w}), got {tuple(x.shape)} "
+                f"(resample panoramas to {h}x{w} first; this model's resolution is fixed)"
+            )
+
+    def encode_normalized(self, x: torch.Tensor) -> DiagonalGaussian:
+        """x (B, 4, H, W) z-scored -> posterior over z with (B, latent_dim) mean and logvar."""
+        self._check_input(x, self.config.in_channels, "encode_normalized: x")
+        mean, logvar = self.encoder(x).chunk(2, dim=1)
+        lo, hi = self.config.logvar_range
+        return DiagonalGaussian(mean, logvar.clamp(lo, hi))
+
+    def decode_normalized(self, z: torch.Tensor) -> torch.Tensor:
+        """z (B, latent_dim) -> x_hat (B, 4, H, W) in the z-scored domain (no activation)."""
+        if z.dim() != 2 or z.shape[1] != self.config.latent_dim:
+            raise ShapeError(
+                f"decode: expected z of shape (B, {self.config.latent_dim}), got {tuple(z.shape)}"
+            )
+        return self.decoder(z)
+
+    def forward_normalized(self, x: torch.Tensor, sample: bool | None = None,
+                           generator: torch.Generator | None = None,
+                           ) -> tuple[torch.Tensor, DiagonalGaussian]:
+        """Reconstruct z-scored panoramas: x (B, 4, H, W) -> (x_hat (B, 4, H, W), posterior).
+
+        ``sample`` selects a reparameterised sample (default while training) or the posterior
+        mean (default in eval mode). The latitude channels are appended inside.
+        """
+        posterior = self.encode_normalized(x)
+        if sample is None:
+            sample = self.training
+        z = posterior.sample(generator) if sample else posterior.mode()
+        return self.decode_normalized(z), posterior
+
+    forward = forward_normalized
+
+    # ------------------------------------------------------------------ physical domain
+    def _require_normalization(self) -> Normalization:
+        if self.normalization is None:
+            raise RoomlightError(
+                "PanoVAE has no normalisation statistics; compute them with "
+                "Normalization.from_data(...) and set model.normalization, or load a checkpoint"
+            )
+        return self.normalization
+
+    def encode(self, radiance: torch.Tensor, depth: torch.Tensor) -> DiagonalGaussian:
+        """Posterior for linear radiance (B, 3, H, W) and radial depth (B, 1, H, W).
+
+        Depth must be in :attr:`metadata` ``["depth_units"]`` (metres, or scale-free for the
+        authors' model: divide by the geometric mean first).
+        """
+        return self.encode_normalized(self._require_normalization().normalize(radiance, depth))
+
+    def decode(self, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """z (B, latent_dim) -> (radiance (B, 3, H, W) linear in [0, 1e6], depth (B, 1, H, W) > 0)."""
+        return self._require_normalization().denormalize(self.decode_normalized(z))
+
+    # ------------------------------------------------------------------ checkpoints
+    def save_pretrained(self, directory: str | Path, training_config=None) -> Path:
+        """Write ``model.safetensors`` + ``config.json`` into ``directory`` (created if needed).
+
+        ``training_config`` (a dataclass or dict) is stored verbatim for provenance. Returns the
+        directory. No pickle is involved, so the result is safe to share.
+        """
+        import dataclasses
+
+        from safetensors.torch import save_file
+
+        from roomlight import __version__
+
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        if dataclasses.is_dataclass(training_config) and not isinstance(training_config, type):
+            training_config = dataclasses.asdict(training_config)
+        tensors = {k: v.detach().to("cpu").contiguous() for k, v in self.state_dict().items()}
+        save_file(tensors, str(directory / WEIGHTS_NAME), metadata={"format": FORMAT_NAME})
+        meta = {
+            "format": FORMAT_NAME,
+            "format_version": FORMAT_VERSION,
+            "roomlight_version": __version__,
+            "model": self.config.to_dict(),
+            "normalization": None if self.normalization is None else self.normalization.to_dict(),
+            "metadata": self.metadata,
+            "training": training_config,
+        }
+        (directory / CONFIG_NAME).write_text(json.dumps(meta, indent=2, default=str) + "\n")
+        return directory
+
+    @classmethod
+    def from_pretrained(cls, path: str | Path, device: str | torch.device = "cpu") -> "PanoVAE":
+        """Load a model saved by :meth:`save_pretrained`, or the authors' run folder.
+
+        ``path`` may be the checkpoint directory or a file inside it (``config.json``,
+        ``model.safetensors``, ``config.yaml``, ``last_epoch.pth``). The authors' format is
+        recognised by ``config.yaml`` + a ``.pth`` file; it is a third-party pickle and is loaded
+        with ``weights_only=True`` (a warning says so). Returns the model in eval mode.
+        """
+        path = Path(path)
+        if not path.exists():
+            raise InputFileError(path, "no such file or directory", "pass a checkpoint directory")
+        directory = path if path.is_dir() else path.parent
+        if (directory / CONFIG_NAME).exists() and (directory / WEIGHTS_NAME).exists():
+            model = cls._load_roomlight(directory)
+        elif (directory / "config.yaml").exists() or path.suffix == ".pth":
+            from roomlight.model.convert import load_authors_run
+
+            model = load_authors_run(path, cls=cls)
+        else:
+            raise InputFileError(
+                directory, f"not a checkpoint: expected {CONFIG_NAME} + {WEIGHTS_NAME} (roomlight) "
+                "or config.yaml + last_epoch.pth (the authors' run folder)",
+                "point at the folder written by save_pretrained or `roomlight convert`",
+            )
+        return model.to(device).eval()
+
+    @classmethod
+    def _load_roomlight(cls, directory: Path) -> "PanoVAE":
+        from safetensors.torch import load_file
+
+        cfg_path = directory / CONFIG_NAME
+        try:
+            meta = json.loads(cfg_path.read_text())
+        except (OSError, json.JSONDecodeError) as e:
+            raise InputFileError(cfg_path, f"cannot read JSON ({e})") from None
+        if meta.get("format") != FORMAT_NAME:
+            raise InputFileError(cfg_path, f"format is {meta.get('format')!r}, expected {FORMAT_NAME!r}")
+        if meta.get("format_version", 0) > FORMAT_VERSION:
+            raise InputFileError(
+                cfg_path, f"format_version {meta['format_version']} is newer than this roomlight "
+                f"understands ({FORMAT_VERSION})", "upgrade roomlight",
+            )
+        config = ModelConfig.from_dict(meta["model"])
+        norm = meta.get("normalization")
+        metadata = dict(meta.get("metadata") or {})
+        if meta.get("training") is not None:
+            metadata.setdefault("training", meta["training"])
+        metadata.setdefault("saved_with_roomlight", meta.get("roomlight_version"))
+        model = cls(config, None if norm is None else Normalization.from_dict(norm), metadata)
+        state = load_file(str(directory / WEIGHTS_NAME))
+        load_state_dict_checked(model, state, str(directory / WEIGHTS_NAME))
+        return model
+
+
+def load_state_dict_checked(model: nn.Module, state: dict, source: str) -> None:
+    """``load_state_dict(strict=True)`` with an error that lists the first mismatches."""
+    own = model.state_dict()
+    missing = [k for k in own if k not in state]
+    unexpected = [k for k in state if k not in own]
+    wrong = [f"{k}: expected {tuple(own[k].shape)}, got {tuple(state[k].shape)}"
+             for k in own if k in state and own[k].shape != state[k].shape]
+    if missing or unexpected or wrong:
+        parts = []
+        if missing:
+            parts.append(f"{len(missing)} missing (e.g. {missing[:3]})")
+        if unexpected:
+            parts.append(f"{len(unexpected)} unexpected (e.g. {unexpected[:3]})")
+        if wrong:
+            parts.append(f"{len(wrong)} with wrong shape (e.g. {wrong[:3]})")
+        raise InputFileError(
+            source, "weights do not match the model config: " + "; ".join(parts),
+            "check that the config file belongs to these weights",
+        )
+    model.load_state_dict(state, strict=True)

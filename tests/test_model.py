@@ -1,0 +1,498 @@
+"""Tests of the prior's network, normalisation and checkpoint formats (roomlight.model).
+
+The authors'-format parity test compares the package against an independent functional forward
+written here from the spec (docs: authors-checkpoint.md, DESIGN.md §3), using only F.conv2d,
+F.group_norm and explicit index-based spherical padding.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+import torch
+import torch.nn.functional as F
+
+from roomlight.errors import InputFileError, RoomlightError, ShapeError
+from roomlight.model import (
+    AUTHORS_NORMALIZATION,
+    DiagonalGaussian,
+    ModelConfig,
+    Normalization,
+    PanoVAE,
+    ThirdPartyCheckpointWarning,
+    convert_authors_checkpoint,
+    get_preset,
+    to_authors_state_dict,
+)
+from roomlight.model.blocks import AdaGN, AdaGNResBlock, ResBlock, SphericalConv2d, Upsample
+
+# A 4-stage config (like the paper's) that is cheap: downsampling factor 16, bottleneck 2 x 4.
+FOUR_STAGE = ModelConfig(resolution=(32, 64), latent_dim=8, ch=8, ch_mult=(1, 1, 2, 2),
+                         z_channels=4, norm_groups=4)
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(old)
+
+
+def _randomize(model: torch.nn.Module, seed: int = 0) -> torch.nn.Module:
+    """Give every parameter (including the zero-initialised AdaGN linears) random values."""
+    g = torch.Generator().manual_seed(seed)
+    with torch.no_grad():
+        for name, p in model.named_parameters():
+            if p.dim() > 1:
+                fan_in = p[0].numel()
+                p.copy_(torch.randn(p.shape, generator=g) / math.sqrt(fan_in))
+            elif "norm" in name and name.endswith("weight"):
+                p.copy_(1.0 + 0.1 * torch.randn(p.shape, generator=g))
+            else:
+                p.copy_(0.1 * torch.randn(p.shape, generator=g))
+    return model
+
+
+def _tiny_norm() -> Normalization:
+    return Normalization(mean=(0.5, 0.4, 0.3, 1.0), std=(0.7, 0.6, 0.5, 0.4))
+
+
+# ----------------------------------------------------------------------------- config
+def test_presets_are_valid_and_round_trip():
+    for name in ("default", "small", "tiny"):
+        cfg = get_preset(name)
+        assert ModelConfig.from_dict(json.loads(json.dumps(cfg.to_dict()))) == cfg
+    assert get_preset("default") == ModelConfig()
+
+
+def test_config_rejects_bad_values():
+    with pytest.raises(RoomlightError, match="norm_groups=3 does not divide"):
+        ModelConfig(norm_groups=3)
+    with pytest.raises(RoomlightError, match="W = 2 H"):
+        ModelConfig(resolution=(128, 128))
+    with pytest.raises(RoomlightError, match="not divisible by the downsampling factor 16"):
+        ModelConfig(resolution=(120, 240))
+    with pytest.raises(RoomlightError, match="unknown field"):
+        ModelConfig.from_dict({"chanels": 3})
+    with pytest.raises(RoomlightError, match="unknown model preset"):
+        get_preset("huge")
+
+
+# ----------------------------------------------------------------------------- size and layout
+def test_default_parameter_count_and_authors_layout():
+    model = PanoVAE()
+    assert sum(p.numel() for p in model.parameters()) == 13_918_628
+    assert len(list(model.buffers())) == 0
+    theirs = to_authors_state_dict(model.state_dict(), model.config)
+    expected = authors_layout()
+    assert list(theirs) == list(expected)  # same keys, same order
+    for key, shape in expected.items():
+        assert tuple(theirs[key].shape) == shape, key
+    assert sum(math.prod(s) for s in expected.values()) == 13_918_628
+    assert len(expected) == 96
+
+
+def test_shapes_tiny():
+    cfg = get_preset("tiny")
+    model = PanoVAE(cfg, _tiny_norm()).eval()
+    h, w = cfg.resolution
+    x = torch.randn(2, 4, h, w)
+    x_hat, post = model.forward_normalized(x)
+    assert x_hat.shape == (2, 4, h, w)
+    assert post.mean.shape == post.logvar.shape == (2, cfg.latent_dim)
+    maps = model.encoder.feature_maps(x)
+    assert [tuple(m.shape[-2:]) for m in maps] == [(16, 32), (8, 16), (4, 8), (4, 8)]
+    radiance, depth = model.decode(torch.randn(3, cfg.latent_dim))
+    assert radiance.shape == (3, 3, h, w) and depth.shape == (3, 1, h, w)
+    assert radiance.min() >= 0 and depth.min() > 0
+    post = model.encode(torch.rand(2, 3, h, w) * 5, torch.rand(2, 1, h, w) + 0.5)
+    assert post.mode().shape == (2, cfg.latent_dim)
+
+
+def test_bad_inputs_raise_helpful_errors():
+    model = PanoVAE(get_preset("tiny"))
+    with pytest.raises(ShapeError, match=r"expected shape \(B, 4, 16, 32\), got \(1, 4, 32, 64\)"):
+        model.encode_normalized(torch.zeros(1, 4, 32, 64))
+    with pytest.raises(ShapeError, match=r"expected z of shape \(B, 16\)"):
+        model.decode_normalized(torch.zeros(1, 15))
+    with pytest.raises(RoomlightError, match="no normalisation statistics"):
+        model.decode(torch.zeros(1, 16))
+    model.normalization = _tiny_norm()
+    with pytest.raises(RoomlightError, match="depth must be finite and > 0"):
+        model.encode(torch.ones(1, 3, 16, 32), torch.zeros(1, 1, 16, 32))
+
+
+def test_logvar_is_clamped():
+    model = PanoVAE(get_preset("tiny"))
+    with torch.no_grad():
+        model.encoder.to_moments.bias[16:] = 100.0
+    post = model.encode_normalized(torch.zeros(1, 4, 16, 32))
+    assert torch.all(post.logvar == 20.0)
+
+
+# ----------------------------------------------------------------------------- blocks
+def test_adagn_zero_init_equals_groupnorm():
+    torch.manual_seed(0)
+    ada = AdaGN(16, 10, 4)
+    x, z = torch.randn(3, 16, 4, 8) * 3 + 1, torch.randn(3, 10)
+    assert torch.equal(ada.to_scale_shift.weight, torch.zeros(32, 10))
+    torch.testing.assert_close(ada(x, z), F.group_norm(x, 4, eps=1e-6))
+    # A fresh AdaGN ResBlock therefore equals a ResBlock with unit/zero GroupNorm affines.
+    block, plain = AdaGNResBlock(16, 10, 4), ResBlock(16, 4)
+    plain.conv1.load_state_dict(block.conv1.state_dict())
+    plain.conv2.load_state_dict(block.conv2.state_dict())
+    torch.testing.assert_close(block(x, z), plain(x))
+
+
+def test_adagn_applies_scale_then_shift():
+    ada = AdaGN(4, 2, 2)
+    with torch.no_grad():
+        ada.to_scale_shift.bias.copy_(torch.tensor([1.0, 2.0, 3.0, 4.0, 10.0, 20.0, 30.0, 40.0]))
+    x = torch.randn(1, 4, 2, 4)
+    ref = F.group_norm(x, 2, eps=1e-6) * torch.tensor([2.0, 3.0, 4.0, 5.0]).view(1, 4, 1, 1) \
+        + torch.tensor([10.0, 20.0, 30.0, 40.0]).view(1, 4, 1, 1)
+    torch.testing.assert_close(ada(x, torch.zeros(1, 2)), ref)
+
+
+@pytest.mark.parametrize("stride", [1, 2])
+def test_padded_conv_matches_reference_and_is_roll_equivariant(stride):
+    torch.manual_seed(0)
+    conv = SphericalConv2d(3, 5, stride=stride).double()
+    x = torch.randn(2, 3, 8, 16, dtype=torch.float64)
+    ref = F.conv2d(ref_spherical_pad(x), conv.conv.weight, conv.conv.bias, stride=stride)
+    torch.testing.assert_close(conv(x), ref)
+    for k in (2, 6, 10):
+        y = conv(torch.roll(x, k, dims=3))
+        torch.testing.assert_close(y, torch.roll(conv(x), k // stride, dims=3), rtol=0, atol=1e-12)
+
+
+def test_upsample_is_nearest_then_conv():
+    up = Upsample(2, 3).double()
+    x = torch.randn(1, 2, 4, 8, dtype=torch.float64)
+    big = x.repeat_interleave(2, dim=2).repeat_interleave(2, dim=3)
+    ref = F.conv2d(ref_spherical_pad(big), up.conv.conv.weight, up.conv.conv.bias)
+    torch.testing.assert_close(up(x), ref)
+
+
+def test_encoder_feature_maps_and_decoder_are_roll_equivariant():
+    torch.manual_seed(0)
+    model = _randomize(PanoVAE(FOUR_STAGE)).double().eval()
+    f = FOUR_STAGE.downsample_factor
+    assert f == 16
+    x = torch.randn(2, 4, 32, 64, dtype=torch.float64)
+    for k in (1, 3):
+        shifted = model.encoder.feature_maps(torch.roll(x, k * f, dims=3))
+        for level, (a, b) in enumerate(zip(model.encoder.feature_maps(x), shifted)):
+            step = k * f * a.shape[-1] // 64
+            torch.testing.assert_close(b, torch.roll(a, step, dims=3), rtol=0, atol=1e-10,
+                                       msg=f"feature map {level}")
+    z = torch.randn(2, FOUR_STAGE.latent_dim, dtype=torch.float64)
+    h = model.decoder.latent_to_map(z)
+    out = model.decoder.decode_map(h, z)
+    out_rolled = model.decoder.decode_map(torch.roll(h, 1, dims=3), z)
+    torch.testing.assert_close(out_rolled, torch.roll(out, f, dims=3), rtol=0, atol=1e-10)
+
+
+# ----------------------------------------------------------------------------- determinism
+def test_determinism_under_seed():
+    cfg = get_preset("tiny")
+    torch.manual_seed(123)
+    a = PanoVAE(cfg)
+    torch.manual_seed(123)
+    b = PanoVAE(cfg)
+    for (ka, va), (kb, vb) in zip(a.state_dict().items(), b.state_dict().items()):
+        assert ka == kb and torch.equal(va, vb)
+    x = torch.randn(2, 4, 16, 32)
+    out1, _ = a.forward_normalized(x, sample=True, generator=torch.Generator().manual_seed(7))
+    out2, _ = b.forward_normalized(x, sample=True, generator=torch.Generator().manual_seed(7))
+    out3, _ = b.forward_normalized(x, sample=True, generator=torch.Generator().manual_seed(8))
+    assert torch.equal(out1, out2)
+    assert not torch.equal(out1, out3)
+    # Eval mode defaults to the posterior mean, hence is deterministic without a generator.
+    a.eval()
+    assert torch.equal(a(x)[0], a(x)[0])
+
+
+def test_posterior_sample_and_kl():
+    mean = torch.tensor([[1.0, 0.0]])
+    logvar = torch.log(torch.tensor([[4.0, 0.25]]))
+    post = DiagonalGaussian(mean, logvar)
+    expected = 0.5 * ((1 + 4 - 1 - math.log(4)) + (0 + 0.25 - 1 - math.log(0.25)))
+    torch.testing.assert_close(post.kl(), torch.tensor([expected]))
+    s = DiagonalGaussian(mean.expand(20000, 2), logvar.expand(20000, 2)).sample(
+        torch.Generator().manual_seed(0))
+    torch.testing.assert_close(s.mean(0), mean[0], atol=0.05, rtol=0)
+    torch.testing.assert_close(s.std(0), torch.tensor([2.0, 0.5]), atol=0.05, rtol=0)
+
+
+# ----------------------------------------------------------------------------- normalisation
+def test_normalization_from_data_streams_exactly():
+    g = torch.Generator().manual_seed(0)
+    items = [(torch.rand(3, 4, 8, generator=g) * 20, torch.rand(1, 4, 8, generator=g) * 5 + 0.1)
+             for _ in range(5)]
+    batched = [(torch.stack([r for r, _ in items[:2]]), torch.stack([d for _, d in items[:2]]))]
+    batched += [(r, d[0]) for r, d in items[2:]]  # mixed batching and (H, W) depth
+    allx = torch.cat([torch.cat([torch.log1p(r.double()), torch.log(d.double())]).reshape(4, -1)
+                      for r, d in items], dim=1)
+    for source in (items, batched):
+        norm = Normalization.from_data(iter(source))
+        torch.testing.assert_close(torch.tensor(norm.mean, dtype=torch.float64), allx.mean(1))
+        torch.testing.assert_close(torch.tensor(norm.std, dtype=torch.float64),
+                                   allx.std(1, unbiased=False))
+    assert Normalization.from_dict(json.loads(json.dumps(norm.to_dict()))) == norm
+    with pytest.raises(RoomlightError, match="no data"):
+        Normalization.from_data([])
+
+
+def test_normalize_denormalize_round_trip():
+    norm = _tiny_norm()
+    radiance = torch.rand(2, 3, 4, 8, dtype=torch.float64) * 100
+    depth = torch.rand(2, 1, 4, 8, dtype=torch.float64) * 10 + 0.1
+    x = norm.normalize(radiance, depth)
+    ref0 = (torch.log1p(radiance[:, 0]) - 0.5) / 0.7
+    torch.testing.assert_close(x[:, 0], ref0)
+    torch.testing.assert_close(x[:, 3], (torch.log(depth[:, 0]) - 1.0) / 0.4)
+    r2, d2 = norm.denormalize(x)
+    torch.testing.assert_close(r2, radiance)
+    torch.testing.assert_close(d2, depth)
+    huge, _ = norm.denormalize(torch.full((1, 4, 2, 4), 1000.0))
+    assert huge.max() == 1e6  # clamped, not inf
+    with pytest.raises(ShapeError, match="channels first"):
+        norm.normalize(torch.rand(4, 8, 3), torch.rand(4, 8))
+
+
+# ----------------------------------------------------------------------------- our checkpoints
+def test_save_load_round_trip(tmp_path):
+    torch.manual_seed(0)
+    model = _randomize(PanoVAE(get_preset("tiny"), _tiny_norm())).eval()
+    model.save_pretrained(tmp_path / "ckpt", training_config={"lr": 2e-4, "epochs": 3})
+    meta = json.loads((tmp_path / "ckpt" / "config.json").read_text())
+    assert meta["format"] == "roomlight.panovae" and meta["model"]["ch"] == 8
+    assert meta["normalization"]["mean"] == list(_tiny_norm().mean)
+    assert meta["training"] == {"lr": 2e-4, "epochs": 3} and "roomlight_version" in meta
+    loaded = PanoVAE.from_pretrained(tmp_path / "ckpt")
+    assert loaded.config == model.config and loaded.normalization == model.normalization
+    assert loaded.metadata["depth_units"] == "metres"
+    z = torch.randn(2, 16)
+    x = torch.randn(2, 4, 16, 32)
+    assert torch.equal(loaded.decode_normalized(z), model.decode_normalized(z))
+    assert torch.equal(loaded.encode_normalized(x).mean, model.encode_normalized(x).mean)
+    for a, b in zip(loaded.decode(z), model.decode(z)):
+        assert torch.equal(a, b)
+    # A file inside the folder works too.
+    assert PanoVAE.from_pretrained(tmp_path / "ckpt" / "model.safetensors").config == model.config
+
+
+def test_from_pretrained_errors(tmp_path):
+    with pytest.raises(InputFileError, match="no such file"):
+        PanoVAE.from_pretrained(tmp_path / "missing")
+    with pytest.raises(InputFileError, match="not a checkpoint"):
+        PanoVAE.from_pretrained(tmp_path)
+    PanoVAE(get_preset("tiny"), _tiny_norm()).save_pretrained(tmp_path / "c")
+    meta = json.loads((tmp_path / "c" / "config.json").read_text())
+    meta["model"]["ch"] = 16
+    (tmp_path / "c" / "config.json").write_text(json.dumps(meta))
+    with pytest.raises(InputFileError, match="weights do not match the model config"):
+        PanoVAE.from_pretrained(tmp_path / "c")
+
+
+# ----------------------------------------------------------------------------- authors' format
+def authors_layout() -> dict[str, tuple[int, ...]]:
+    """The authors' state_dict keys and shapes, transcribed from authors-checkpoint.md."""
+    E, D = "encoder.model.", "decoder.model."
+    out: dict[str, tuple[int, ...]] = {}
+
+    def conv(key, co, ci):
+        out[key + ".weight"], out[key + ".bias"] = (co, ci, 3, 3), (co,)
+
+    def res(idx, c, ada=False):  # state_dict order: norm1, norm2, conv1, conv2
+        p = f"{D if ada else E}{idx}."
+        for n in ("norm1", "norm2"):
+            if ada:
+                out[f"{p}{n}.to_scale_shift.weight"], out[f"{p}{n}.to_scale_shift.bias"] = \
+                    (2 * c, 512), (2 * c,)
+            else:
+                out[f"{p}{n}.weight"], out[f"{p}{n}.bias"] = (c,), (c,)
+        conv(f"{p}conv1.conv", c, c)
+        conv(f"{p}conv2.conv", c, c)
+
+    conv(f"{E}1.conv", 64, 6)
+    for down, c_in, c in ((2, 64, 64), (4, 64, 128), (6, 128, 256), (8, 256, 256)):
+        conv(f"{E}{down}.conv", c, c_in)
+        res(down + 1, c)
+    out[f"{E}10.weight"], out[f"{E}10.bias"] = (256,), (256,)
+    conv(f"{E}12.conv", 32, 256)
+    conv(f"{D}1.conv", 256, 34)
+    for up, c_in, c in ((2, 256, 256), (4, 256, 128), (6, 128, 64), (8, 64, 64)):
+        conv(f"{D}{up}.conv.conv", c, c_in)
+        res(up + 1, c, ada=True)
+    out[f"{D}10.to_scale_shift.weight"], out[f"{D}10.to_scale_shift.bias"] = (128, 512), (128,)
+    conv(f"{D}12.conv", 4, 64)
+    out["quant.weight"], out["quant.bias"] = (1024, 4096), (1024,)
+    out["post_quant.weight"], out["post_quant.bias"] = (4096, 512), (4096,)
+    return out
+
+
+AUTHORS_YAML = """\
+model:
+  resolution:
+  - 128
+  - 256
+  latent_dim: 512
+  ch: 64
+  ch_mult:
+  - 1
+  - 2
+  - 4
+  - 4
+  num_res_blocks: 1
+  z_channels: 32
+  norm_groups: 8
+train:
+  batch_size: 32
+  lr: 0.0002
+  epochs: 300
+data_dir: /data/laval
+"""
+
+
+def random_authors_state_dict(seed: int = 0) -> dict[str, torch.Tensor]:
+    g = torch.Generator().manual_seed(seed)
+    sd = {}
+    for key, shape in authors_layout().items():
+        if len(shape) > 1:
+            t = torch.randn(shape, generator=g) / math.sqrt(math.prod(shape[1:]))
+            if "to_scale_shift" in key:
+                t = t * 0.3
+        elif "norm" in key and key.endswith("weight") or key == "encoder.model.10.weight":
+            t = 1.0 + 0.1 * torch.randn(shape, generator=g)
+        else:
+            t = 0.1 * torch.randn(shape, generator=g)
+        sd[key] = t
+    return sd
+
+
+def ref_spherical_pad(x: torch.Tensor) -> torch.Tensor:
+    """One-pixel spherical padding by explicit indexing: padded(i, j) = x(row(i), col(i, j))."""
+    _, _, h, w = x.shape
+    i = torch.arange(-1, h + 1)
+    j = torch.arange(-1, w + 1) % w
+    beyond_pole = (i < 0) | (i >= h)
+    row = torch.where(i < 0, -1 - i, torch.where(i >= h, 2 * h - 1 - i, i))
+    col = torch.where(beyond_pole[:, None], (j[None, :] + w // 2) % w, j[None, :].expand(h + 2, -1))
+    return x[:, :, row[:, None], col]
+
+
+def ref_forward(sd: dict, x: torch.Tensor | None = None, z: torch.Tensor | None = None):
+    """Direct functional forward of the authors' network (default config) from the spec."""
+    E, D, G, eps = "encoder.model.", "decoder.model.", 8, 1e-6
+
+    def lat(t):
+        b, _, h, w = t.shape
+        theta = (torch.arange(h, dtype=t.dtype) + 0.5) * math.pi / h
+        c = torch.stack([torch.cos(theta), torch.sin(theta)])[None, :, :, None].expand(b, 2, h, w)
+        return torch.cat([t, c], dim=1)
+
+    def conv(t, key, stride=1):
+        return F.conv2d(ref_spherical_pad(t), sd[key + ".weight"], sd[key + ".bias"], stride=stride)
+
+    def gn(t, key):
+        return F.group_norm(t, G, sd[key + ".weight"], sd[key + ".bias"], eps=eps)
+
+    def ada(t, key, zz):
+        c = t.shape[1]
+        ss = F.linear(zz, sd[key + ".to_scale_shift.weight"], sd[key + ".to_scale_shift.bias"])
+        return F.group_norm(t, G, eps=eps) * (1 + ss[:, :c, None, None]) + ss[:, c:, None, None]
+
+    out = {}
+    if x is not None:
+        h = conv(lat(x), f"{E}1.conv")
+        for down, res in ((2, 3), (4, 5), (6, 7), (8, 9)):
+            h = conv(h, f"{E}{down}.conv", stride=2)
+            r = conv(F.silu(gn(h, f"{E}{res}.norm1")), f"{E}{res}.conv1.conv")
+            h = h + conv(F.silu(gn(r, f"{E}{res}.norm2")), f"{E}{res}.conv2.conv")
+        h = conv(F.silu(gn(h, f"{E}10")), f"{E}12.conv")
+        assert h.shape[1:] == (32, 8, 16)
+        moments = F.linear(h.reshape(h.shape[0], -1), sd["quant.weight"], sd["quant.bias"])
+        out["mean"], out["logvar"] = moments[:, :512], moments[:, 512:].clamp(-30, 20)
+    if z is not None:
+        h = F.linear(z, sd["post_quant.weight"], sd["post_quant.bias"]).reshape(-1, 32, 8, 16)
+        h = conv(lat(h), f"{D}1.conv")
+        for up, res in ((2, 3), (4, 5), (6, 7), (8, 9)):
+            h = h.repeat_interleave(2, dim=2).repeat_interleave(2, dim=3)
+            h = conv(h, f"{D}{up}.conv.conv")
+            r = conv(F.silu(ada(h, f"{D}{res}.norm1", z)), f"{D}{res}.conv1.conv")
+            h = h + conv(F.silu(ada(r, f"{D}{res}.norm2", z)), f"{D}{res}.conv2.conv")
+        out["x_hat"] = conv(F.silu(ada(h, f"{D}10", z)), f"{D}12.conv")
+    return out
+
+
+def _write_authors_run(directory, payload):
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "config.yaml").write_text(AUTHORS_YAML)
+    torch.save(payload, directory / "last_epoch.pth")
+    return directory
+
+
+def test_from_pretrained_authors_run_matches_reference_forward(tmp_path):
+    sd = random_authors_state_dict()
+    run = _write_authors_run(tmp_path / "run", {"epoch": 299, "step": 21000, "state_dict": sd})
+    with pytest.warns(ThirdPartyCheckpointWarning, match="pickle written by a third party"):
+        model = PanoVAE.from_pretrained(run)
+    assert model.config == ModelConfig()
+    assert model.normalization == AUTHORS_NORMALIZATION
+    assert model.metadata["depth_units"] == "scale-free"
+    assert model.metadata["epoch"] == 299 and model.metadata["step"] == 21000
+    assert model.metadata["training"]["batch_size"] == 32
+
+    model = model.double()
+    sd64 = {k: v.double() for k, v in sd.items()}
+    g = torch.Generator().manual_seed(1)
+    z = torch.randn(1, 512, generator=g, dtype=torch.float64)
+    x = torch.randn(1, 4, 128, 256, generator=g, dtype=torch.float64)
+    with torch.no_grad():
+        ref = ref_forward(sd64, x=x, z=z)
+        x_hat = model.decode_normalized(z)
+        post = model.encode_normalized(x)
+        radiance, depth = model.decode(z)
+    assert ref["x_hat"].std() > 0.1  # the comparison is not between two near-constant maps
+    torch.testing.assert_close(x_hat, ref["x_hat"], rtol=1e-9, atol=1e-9)
+    torch.testing.assert_close(post.mean, ref["mean"], rtol=1e-9, atol=1e-9)
+    torch.testing.assert_close(post.logvar, ref["logvar"], rtol=1e-9, atol=1e-9)
+    # The authors' hard-coded normalisation and output mapping.
+    mean = torch.tensor([0.9586, 0.7788, 0.4920, 0.0020], dtype=torch.float64).view(1, 4, 1, 1)
+    std = torch.tensor([0.6250, 0.5933, 0.5579, 0.4601], dtype=torch.float64).view(1, 4, 1, 1)
+    y = ref["x_hat"] * std + mean
+    torch.testing.assert_close(radiance, torch.expm1(y[:, :3]).clamp(0, 1e6))
+    torch.testing.assert_close(depth, torch.exp(y[:, 3:]))
+
+
+def test_authors_bare_state_dict_and_conversion(tmp_path):
+    sd = random_authors_state_dict(seed=3)
+    run = _write_authors_run(tmp_path / "bare", sd)
+    with pytest.warns(ThirdPartyCheckpointWarning):
+        model = PanoVAE.from_pretrained(run / "last_epoch.pth")
+    with pytest.warns(ThirdPartyCheckpointWarning):
+        out = convert_authors_checkpoint(run, tmp_path / "converted")
+    assert (out / "model.safetensors").exists() and not list(out.glob("*.pth"))
+    converted = PanoVAE.from_pretrained(out)
+    assert converted.metadata["depth_units"] == "scale-free"
+    assert converted.normalization == AUTHORS_NORMALIZATION
+    z = torch.randn(1, 512)
+    with torch.no_grad():
+        assert torch.equal(converted.decode_normalized(z), model.decode_normalized(z))
+    # Back to the authors' layout: the very same tensors under the very same names.
+    back = to_authors_state_dict(converted.state_dict(), converted.config)
+    assert list(back) == list(sd) and all(torch.equal(back[k], sd[k]) for k in sd)
+
+
+def test_authors_checkpoint_with_wrong_shapes_is_rejected(tmp_path):
+    sd = random_authors_state_dict()
+    sd["decoder.model.12.conv.weight"] = torch.zeros(3, 64, 3, 3)
+    run = _write_authors_run(tmp_path / "bad", {"epoch": 0, "step": 0, "state_dict": sd})
+    with pytest.warns(ThirdPartyCheckpointWarning), pytest.raises(
+            InputFileError, match=r"decoder.out_conv.conv.weight: expected \(4, 64, 3, 3\)"):
+        PanoVAE.from_pretrained(run)
