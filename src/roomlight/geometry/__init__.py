@@ -18,10 +18,11 @@ from roomlight.geometry.projection import (
     perspective_directions,
     perspective_to_panorama,
 )
+from roomlight.geometry.resample import resize_panorama
 from roomlight.geometry.rotation import rotate_panorama, rotation_matrix
 
 __all__ = [
-    "box_distance", "box_room_depth",
+    "box_distance", "box_room_depth", "resize_panorama",
     "check_equirect_shape", "direction_to_uv", "latitude_channels", "pixel_directions",
     "pixel_solid_angles", "pixel_uv", "sample_equirect", "uv_to_direction",
     "SphericalPad", "spherical_pad", "camera_basis", "panorama_to_perspective",

@@ -1,0 +1,43 @@
+"""``roomlight`` command-line entry point: one sub-command per file in this package."""
+
+from __future__ import annotations
+
+import click
+
+from roomlight import __version__
+from roomlight.cli.common import RoomlightGroup
+
+
+@click.group(cls=RoomlightGroup, context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(__version__, prog_name="roomlight")
+def cli():
+    """roomlight: spatially-varying indoor illumination as 2.5D area lights.
+
+    Panoramas of HDR radiance + radial depth become emissive meshes that light a scene
+    with parallax and falloff, rendered and optimised through Mitsuba 3.
+
+    \b
+    Start with:
+      roomlight info                       versions, Mitsuba variant, device
+      roomlight demo                       the built-in end-to-end example
+      roomlight emitter PANO --out DIR     panorama -> emitter (PLY, EXR, Mitsuba XML)
+      roomlight render DIR --out DIR       render a view of an emitter scene
+    """
+
+
+def _register():
+    from roomlight.cli import demo, emitter, info, render
+
+    for mod in (info, emitter, render, demo):
+        cli.add_command(mod.command)
+
+
+_register()
+
+
+def main():  # console-script entry point
+    cli(prog_name="roomlight")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,127 @@
+"""The command-line interface: outputs, interoperability with Mitsuba's loaders, clean errors."""
+
+import math
+
+import numpy as np
+import pytest
+import torch
+from click.testing import CliRunner
+
+from roomlight.cli.main import cli
+from roomlight.examples import example_room
+from roomlight.io import read_exr, read_ply, write_exr, write_panorama
+from roomlight.render.camera import perspective_sensor
+from roomlight.render.scene import EmitterScene
+
+
+def run(*args):
+    result = CliRunner().invoke(cli, [str(a) for a in args], catch_exceptions=False)
+    return result
+
+
+@pytest.fixture(scope="module")
+def pano_file(tmp_path_factory):
+    rad, depth = example_room(32)
+    path = tmp_path_factory.mktemp("pano") / "room.exr"
+    write_panorama(path, (rad.numpy(), depth.numpy()))
+    return path
+
+
+def test_info_reports_variant():
+    r = run("info")
+    assert r.exit_code == 0, r.output
+    assert "mitsuba variant" in r.output and ("llvm_ad_rgb" in r.output or "cuda_ad_rgb" in r.output)
+
+
+@pytest.mark.mitsuba
+def test_emitter_bundle_loads_in_mitsuba_and_matches_in_memory_scene(mi, pano_file, tmp_path):
+    out = tmp_path / "bundle"
+    r = run("emitter", pano_file, "--out", out)
+    assert r.exit_code == 0, r.output
+    for name in ("emitter.ply", "radiance.exr", "depth.exr", "scene.xml", "preview.png"):
+        assert (out / name).is_file(), name
+    scene = mi.load_file(str(out / "scene.xml"))
+    ids = [s.id() for s in scene.shapes()]
+    assert ids == ["emitter"]
+    ply = read_ply(out / "emitter.ply")
+    assert ply["vertices"].shape == (32 * 65 + 2 * 64, 3)
+    # The scene read back through Mitsuba's PLY and EXR loaders renders like the in-memory one.
+    rad, depth = example_room(32)
+    r = run("render", out, "--out", tmp_path / "r", "--res", "48x32", "--spp", "64", "--fov", "70",
+            "--look-at", "0.3,-0.2,-1", "--sphere", "0.3,-0.4,-1.2,0.25,mirror")
+    assert r.exit_code == 0, r.output
+    from_file = read_exr(tmp_path / "r" / "render.exr")
+    from_file = np.stack([from_file[c] for c in "RGB"], -1)
+    es = EmitterScene("mesh", (32, 64), objects={"p": {"type": "sphere", "center": [0.3, -0.4, -1.2], "radius": 0.25,
+                                                       "bsdf": {"type": "conductor", "material": "Ag"}}},
+                      sensor=perspective_sensor(target=(0.3, -0.2, -1), fov_deg=70, width=48, height=32),
+                      integrator={"type": "path", "max_depth": 4})
+    es.set_emitter(rad, depth)
+    mem = es.render(spp=64).numpy()
+    assert (tmp_path / "r" / "render.png").is_file()
+    rel = np.abs(from_file - mem).mean() / mem.mean()
+    assert rel < 0.02, rel
+
+
+@pytest.mark.mitsuba
+@pytest.mark.parametrize("kind", ["envmap", "sphere:3"])
+def test_envmap_and_sphere_bundles(mi, pano_file, tmp_path, kind):
+    out = tmp_path / "b"
+    r = run("emitter", pano_file, "--as", kind, "--out", out)
+    assert r.exit_code == 0, r.output
+    scene = mi.load_file(str(out / "scene.xml"))
+    if kind == "envmap":
+        env = read_exr(out / "envmap.exr")
+        assert env["R"].shape == (33, 64)  # pole-to-pole rows for Mitsuba's envmap
+        assert len(scene.emitters()) == 1 and not scene.shapes()
+    else:
+        v = read_ply(out / "emitter.ply")["vertices"][: 32 * 65]  # grid vertices; poles sit at ring centroids
+        assert np.allclose(np.linalg.norm(v, axis=1), 3.0, atol=1e-5)
+
+
+def test_emitter_from_radiance_hdr_and_depth_png(tmp_path):
+    from roomlight.io import write_depth_png, write_hdr
+
+    rad, depth = example_room(16)
+    write_hdr(tmp_path / "r.hdr", rad.numpy())
+    write_depth_png(tmp_path / "d.png", depth.numpy())
+    r = run("emitter", tmp_path / "r.hdr", "--depth", tmp_path / "d.png", "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    v = read_ply(tmp_path / "o" / "emitter.ply")["vertices"][: 16 * 33].reshape(16, 33, 3)[:, :32]
+    assert np.allclose(np.linalg.norm(v, axis=-1), depth.numpy(), atol=1.5e-3)  # mm quantisation
+
+
+def test_user_errors_are_one_line_messages(tmp_path, pano_file):
+    r = run("emitter", tmp_path / "missing.exr", "--out", tmp_path / "o")
+    assert r.exit_code == 2 and "missing.exr" in r.output and "Traceback" not in r.output
+    r = run("emitter", pano_file, "--as", "sphere:-1", "--out", tmp_path / "o")
+    assert r.exit_code == 2 and "positive radius" in r.output
+    rad, _ = example_room(16)
+    write_exr(tmp_path / "rgb.exr", {c: rad[..., i].numpy() for i, c in enumerate("RGB")})
+    r = run("emitter", tmp_path / "rgb.exr", "--out", tmp_path / "o")
+    assert r.exit_code != 0 and "needs depth" in r.output
+    r = run("render", tmp_path / "nowhere", "--out", tmp_path / "o")
+    assert r.exit_code == 2 and "no such scene file" in r.output
+    r = run("render", tmp_path / "nowhere", "--out", tmp_path / "o", "--sphere", "1,2,3")
+    assert r.exit_code == 2 and "radius" in r.output
+    r = run("render", tmp_path / "nowhere", "--out", tmp_path / "o", "--origin", "1,2")
+    assert r.exit_code == 2 and "three comma-separated numbers" in r.output
+
+
+def test_negative_radiance_needs_explicit_fix(tmp_path):
+    rad, depth = example_room(16)
+    rad = rad.clone()
+    rad[3, 4, 1] = -0.5
+    write_panorama(tmp_path / "neg.exr", (rad.numpy(), depth.numpy()), half=False)
+    r = run("emitter", tmp_path / "neg.exr", "--out", tmp_path / "o")
+    assert r.exit_code == 2 and "negative" in r.output and "--clamp-negative" in r.output
+    r = run("emitter", tmp_path / "neg.exr", "--clamp-negative", "--out", tmp_path / "o")
+    assert r.exit_code == 0 and "1 pixel" in r.output
+
+
+@pytest.mark.mitsuba
+def test_demo_runs(tmp_path):
+    r = run("demo", "--out", tmp_path / "demo", "--height", "32", "--res", "48", "--spp", "8")
+    assert r.exit_code == 0, r.output
+    for name in ("comparison.png", "probes_mesh.exr", "probes_envmap.png", "summary.json", "mesh/scene.xml"):
+        assert (tmp_path / "demo" / name).is_file(), name
