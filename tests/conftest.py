@@ -19,3 +19,14 @@ def mi():
     from roomlight.render.variant import mitsuba
 
     return mitsuba()
+
+
+@pytest.fixture
+def mi_scalar():
+    """Mitsuba in 'scalar_rgb' (needs no LLVM); the previous variant is restored afterwards."""
+    mi = pytest.importorskip("mitsuba")
+    previous = mi.variant()
+    mi.set_variant("scalar_rgb")
+    yield mi
+    if previous is not None:
+        mi.set_variant(previous)

@@ -1,10 +1,8 @@
 """The command-line interface: outputs, interoperability with Mitsuba's loaders, clean errors."""
 
-import math
 
 import numpy as np
 import pytest
-import torch
 from click.testing import CliRunner
 
 from roomlight.cli.main import cli

@@ -11,6 +11,7 @@ from roomlight.emitter.area_light import build_area_light
 from roomlight.render.bridge import render_differentiable
 from roomlight.render.camera import perspective_sensor
 from roomlight.render.scene import EmitterScene
+from roomlight.render.variant import mitsuba
 
 pytestmark = pytest.mark.mitsuba
 
@@ -115,15 +116,14 @@ def quadrature_irradiance(vertices, faces, uv, tex, x, n, sub=12):
     return total
 
 
-def mitsuba_irradiance(es, x, n, spp=512):
+def mitsuba_irradiance(es, spp=512):
     """Irradiance at x (normal n) = pi x radiance leaving a tiny white Lambertian patch there."""
-    mi = es.mi
     res = es.render(spp=spp)
     return math.pi * res.reshape(-1, 3).mean(0).double().numpy()
 
 
 def irradiance_scene(kind, h, w, x, n):
-    mi_ = __import__("roomlight.render.variant", fromlist=["mitsuba"]).mitsuba()
+    mi_ = mitsuba()
     x = np.asarray(x, float)
     n = np.asarray(n, float)
     up = [0, 0, 1] if abs(n[1]) > 0.9 else [0, 1, 0]
@@ -153,10 +153,10 @@ def test_irradiance_matches_independent_quadrature(mi):
         q = quadrature_irradiance(V, F, UV, tex.double().numpy(), x, n)
         es = irradiance_scene("mesh", h, w, x, n)
         es.set_emitter(tex, depth)
-        m = mitsuba_irradiance(es, x, n)
+        m = mitsuba_irradiance(es)
         ee = irradiance_scene("envmap", h, w, x, n)
         ee.set_emitter(tex)
-        e = mitsuba_irradiance(ee, x, n)
+        e = mitsuba_irradiance(ee)
         assert np.all(np.abs(m - q) / q < 0.03), (x, m, q)
         quad.append(q); mits.append(m); envs.append(e)
     ratio_q = quad[1] / quad[0]
