@@ -166,3 +166,14 @@ def test_gnomonic_cut_and_paste_back():
     assert 0.05 < mask.float().mean() < 0.5
     err = (pasted - pano)[..., mask]
     assert err.abs().max() < 0.05
+
+
+def test_batched_rotation_matches_one_at_a_time():
+    # B = H = 16 would be ambiguous if the batch dimension of the directions were guessed
+    pano = torch.randn(16, 2, 16, 32, dtype=torch.float64)
+    rots = torch.stack([rotation_matrix((0.1 * k, 1.0, 0.3), 0.05 * k) for k in range(16)])
+    batched = rotate_panorama(pano, rots)
+    for k in (0, 5, 15):
+        assert torch.allclose(batched[k], rotate_panorama(pano[k:k + 1], rots[k])[0], atol=1e-12)
+    shared = rotate_panorama(pano, rots[3])
+    assert torch.allclose(shared[7], rotate_panorama(pano[7:8], rots[3])[0], atol=1e-12)

@@ -96,7 +96,7 @@ def latitude_channels(height: int, width: int, dtype=torch.float32, device=None)
     return ch.to(dtype).contiguous()
 
 
-def sample_equirect(pano: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:
+def sample_equirect(pano: torch.Tensor, directions: torch.Tensor, batched: bool = False) -> torch.Tensor:
     """Bilinearly sample panoramas in arbitrary directions.
 
     Interpolation is continuous across the longitude seam and across the poles (the image is
@@ -104,8 +104,10 @@ def sample_equirect(pano: torch.Tensor, directions: torch.Tensor) -> torch.Tenso
 
     Args:
         pano: (B, C, H, W) panoramas (W = 2H).
-        directions: (B, *S, 3) or (*S, 3) directions (need not be unit length), in the
-            panorama's frame.
+        directions: (*S, 3) directions shared by the whole batch or, with ``batched=True``,
+            (B, *S, 3) directions per panorama (need not be unit length), in the panorama's frame.
+        batched: whether ``directions`` carries a leading batch dimension. It is explicit because
+            a shape such as (16, 32, 3) could be either.
     Returns:
         (B, C, *S) samples.
     """
@@ -115,7 +117,9 @@ def sample_equirect(pano: torch.Tensor, directions: torch.Tensor) -> torch.Tenso
         raise ShapeError(f"sample_equirect: expected pano of shape (B, C, H, W), got {tuple(pano.shape)}")
     b, c, h, w = pano.shape
     check_equirect_shape(h, w)
-    if directions.dim() >= 2 and directions.shape[0] == b and directions.dim() > 2:
+    if batched:
+        if directions.shape[0] != b:
+            raise ShapeError(f"sample_equirect: {b} panoramas but directions for {directions.shape[0]}")
         dirs = directions
     else:
         dirs = directions.unsqueeze(0).expand(b, *directions.shape)

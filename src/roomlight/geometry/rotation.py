@@ -42,4 +42,4 @@ def rotate_panorama(pano: torch.Tensor, rotation: torch.Tensor) -> torch.Tensor:
         src = d @ r  # rows: (R^T d)^T = d^T R
         return sample_equirect(pano, src)
     src = torch.einsum("hwi,bij->bhwj", d, r)
-    return sample_equirect(pano, src)
+    return sample_equirect(pano, src, batched=True)

@@ -22,8 +22,8 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
 
     Args:
         escene: the scene; its emitter kind decides how depth is used.
-        radiance: (H, W, 3) linear radiance (float32, on the CPU for the LLVM variant, on the
-            GPU for CUDA).
+        radiance: (H, W, 3) linear radiance (moved to the variant's device: CPU for LLVM, GPU
+            for CUDA; gradients flow back to the original tensor).
         depth: (H, W) radial depth in scene units (ignored by ``envmap``/``sphere``).
         spp: samples per pixel of the primal render.
         seed: primal seed; vary it per optimisation step to decorrelate the noise.
@@ -32,14 +32,21 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
         spp_grad: samples per pixel of the adjoint pass (default ``spp``).
         sensor: index of the scene's sensor to render.
     Returns:
-        (H_img, W_img, 3) float32 linear image, attached to torch's autograd graph.
+        (H_img, W_img, 3) float32 linear image on the variant's device, attached to torch's
+        autograd graph.
     """
     import drjit as dr
 
+    from roomlight.render.variant import torch_device
+
     mi = escene.mi
     seed_grad = seed + 1 if seed_grad is None else seed_grad
-    tex = escene.texture_value(radiance.float())
-    verts = escene.vertex_value(depth.float() if depth is not None else None, radiance)
+    # drjit.wrap hands tensors over through DLPack: they must live where the variant computes.
+    device = torch_device()
+    radiance = radiance.float().to(device)
+    depth = depth.float().to(device) if depth is not None else None
+    tex = escene.texture_value(radiance)
+    verts = escene.vertex_value(depth, radiance)
     params = escene.params
 
     @dr.wrap(source="torch", target="drjit")

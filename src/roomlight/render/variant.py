@@ -14,7 +14,8 @@ import os
 
 from roomlight.errors import BackendError
 
-__all__ = ["MIN_LLVM", "llvm_status", "cuda_available", "choose_variant", "ensure_variant", "mitsuba"]
+__all__ = ["MIN_LLVM", "llvm_status", "cuda_available", "choose_variant", "ensure_variant", "mitsuba",
+           "torch_device"]
 
 MIN_LLVM = (16, 0, 0)
 LLVM_FIX = (
@@ -92,3 +93,9 @@ def mitsuba():
 
     ensure_variant()
     return mi
+
+
+def torch_device() -> str:
+    """The torch device whose tensors Dr.Jit's active backend shares without copies:
+    ``cuda`` for the CUDA variants, ``cpu`` for LLVM."""
+    return "cuda" if ensure_variant().startswith("cuda") else "cpu"
