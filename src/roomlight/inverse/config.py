@@ -1,0 +1,67 @@
+"""Settings of illumination fitting (paper §3.4 and supplementary "Fitting details")."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields, replace
+
+from roomlight.errors import RoomlightError
+
+__all__ = ["FitConfig", "FIT_PRESETS", "fit_config"]
+
+
+@dataclass(frozen=True)
+class FitConfig:
+    """Every knob of a fit; the defaults are the paper's settings."""
+
+    iterations: int = 500                 #: optimisation steps
+    lr: float = 0.1                       #: Adam learning rate (z, s, and the direct maps alike)
+    betas: tuple[float, float] = (0.9, 0.99)  #: Adam betas (0.99: the gradient is a Monte-Carlo estimate)
+    grad_clip: float = 0.05               #: global gradient-norm clip
+    spp: int = 64                         #: samples per pixel of the fitted view's render
+    max_depth: int = 4                    #: longest light path of the prb integrator
+    seed: int = 0                         #: base seed; iteration t renders with seed + 2t
+    tau: float = 0.99                     #: a target pixel with max channel >= tau counts as saturated
+    c_max: float = 10.0                   #: ceiling on unsaturated render pixels
+    lambda_log: float = 0.1               #: weight of the log-space image term
+    log_eps: float = 1e-3                 #: epsilon of the log-space image term (linear units)
+    lambda_rep: float = 0.1               #: weight of the repulsion term
+    margin: float = 0.05                  #: repulsion margin m in metres (scene units)
+    repulsion_points: int = 512           #: surface points per object for the repulsion term
+    smooth_radiance: float = 5e-5         #: smoothness weight on log radiance (direct methods)
+    smooth_depth: float = 1e-4            #: smoothness weight on log depth (direct-al)
+    init_exposure: float = 0.18           #: e^s at the start (prior) / initial radiance (direct)
+    direct_resolution: tuple[int, int] = (128, 256)  #: (H, W) of the direct methods' maps
+    sphere_margin: float = 0.2            #: sphere proxy = enclosing radius x (1 + this)
+    z_prior: float = 0.0                  #: weight of a Gaussian prior 0.5 |z|^2 on the latent
+    fit_depth_scale: bool = False         #: also fit a global log scale of the decoded depth
+    pixel_subset: float = 1.0             #: fraction of object pixels in the loss each step
+    eval_every: int = 10                  #: best-iterate check period (fixed-seed re-evaluation)
+    eval_spp: int | None = None           #: spp of the best-iterate check (default: spp)
+    view: str = "input"                   #: the scene view to fit
+    image: str = "ldr"                    #: target: 'ldr' (8-bit recording) or 'hdr' (linear EXR)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def override(self, **changes) -> "FitConfig":
+        """A copy with some fields changed (unknown names are refused)."""
+        names = {f.name for f in fields(self)}
+        bad = sorted(set(changes) - names)
+        if bad:
+            raise RoomlightError(f"fit config: unknown field(s) {', '.join(bad)}; known: {', '.join(sorted(names))}")
+        return replace(self, **{k: v for k, v in changes.items() if v is not None})
+
+
+#: ``paper`` = the paper's settings; ``fast`` = a CPU-friendly setting for benchmarks and demos.
+FIT_PRESETS: dict[str, FitConfig] = {
+    "paper": FitConfig(),
+    "fast": FitConfig(iterations=150, spp=16, eval_every=10),
+}
+
+
+def fit_config(preset: str = "paper", **overrides) -> FitConfig:
+    if preset not in FIT_PRESETS:
+        raise RoomlightError(f"unknown fit preset {preset!r}; choose one of {', '.join(FIT_PRESETS)}")
+    return FIT_PRESETS[preset].override(**overrides)
+
+

@@ -1,0 +1,201 @@
+"""Fitting the illumination of a scene view by analysis-by-synthesis (paper §3.4).
+
+Each iteration decodes the light model, renders the fitted view through Mitsuba (prb, max depth
+4) with a fresh seed, and minimises L_img + lambda_rep L_rep + regularisers with Adam and a
+global gradient-norm clip.
+
+Best iterate. Single-iteration losses are Monte-Carlo estimates with independent noise, so
+the smallest of them mostly picks a lucky seed. Every ``eval_every`` iterations (and after
+the last one) the current parameters are instead re-evaluated with one *fixed* seed: all
+candidates then see the same random numbers (common random numbers), their differences reflect
+the parameters rather than the noise, and the best of them under this fixed-seed objective
+is kept.
+
+Non-finite values. A step whose loss or gradient has a NaN/inf is skipped (the parameters
+and Adam's moments are untouched), counted, and recorded in the history; many in a row stop
+the fit with an error naming the iteration.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import torch
+
+from roomlight.errors import RoomlightError
+from roomlight.inverse.config import FitConfig
+from roomlight.inverse.lights import LightModel
+from roomlight.inverse.objective import image_loss
+from roomlight.inverse.repulsion import repulsion_penalty
+
+__all__ = ["FitResult", "Fitter", "MAX_NONFINITE_IN_A_ROW"]
+
+MAX_NONFINITE_IN_A_ROW = 20
+EVAL_SEED_OFFSET = 1_000_003  # the fixed best-iterate seed never coincides with a training seed
+
+
+@dataclass
+class FitResult:
+    """What a fit recovered.
+
+    Attributes:
+        radiance: (H, W, 3) linear radiance (exposure applied), detached, CPU.
+        depth: (H, W) metres, or None for env maps.
+        emitter_kind: ``mesh``, ``envmap`` or ``sphere:R`` (accepted by EmitterScene).
+        history: one dict per iteration (loss terms, seconds, skipped flags, fixed-seed checks).
+        best_iteration: iteration whose parameters were kept.
+        best_loss: their fixed-seed objective.
+    """
+
+    method: str
+    radiance: torch.Tensor
+    depth: torch.Tensor | None
+    emitter_kind: str
+    history: list[dict] = field(default_factory=list)
+    best_iteration: int = 0
+    best_loss: float = float("inf")
+    seconds: float = 0.0
+    nonfinite_steps: int = 0
+    config: dict = field(default_factory=dict)
+
+
+class Fitter:
+    """Runs the optimisation of one light model against one view.
+
+    Args:
+        light: the light model (its ``kind`` fixes the emitter of ``escene``).
+        escene: an EmitterScene of the fitted view (objects + sensor) for ``light.kind``.
+        target: (H, W, 3) linear target image; mask: (H, W) bool object pixels.
+        points: (M, 3) object surface points for the repulsion term, or None.
+        config: the settings.
+    """
+
+    def __init__(self, light: LightModel, escene, target: torch.Tensor, mask: torch.Tensor,
+                 points: torch.Tensor | None, config: FitConfig):
+        self.light, self.escene, self.config = light, escene, config
+        self.target, self.mask = target.float(), mask.bool()
+        if int(self.mask.sum()) == 0:
+            raise RoomlightError("fit: the mask selects no pixel of the target image")
+        self.points = points if (points is not None and light.has_depth and config.lambda_rep > 0) else None
+        params = [p for p in light.parameters() if p.requires_grad]
+        self.params = params
+        self.optimizer = torch.optim.Adam(params, lr=config.lr, betas=tuple(config.betas))
+        self.generator = torch.Generator().manual_seed(config.seed)
+
+    # ------------------------------------------------------------------ objective
+    def terms(self, image: torch.Tensor, radiance, depth, mask) -> dict[str, torch.Tensor]:
+        c = self.config
+        t = image_loss(image, self.target, mask, c.tau, c.c_max, c.lambda_log, c.log_eps)
+        if self.points is not None and depth is not None:
+            t["rep"] = repulsion_penalty(depth, self.points, c.margin)
+            t["total"] = t["img"] + c.lambda_rep * t["rep"]
+        else:
+            t["total"] = t["img"]
+        for name, value in self.light.regularizers().items():
+            t[name] = value
+            t["total"] = t["total"] + value
+        return t
+
+    def _mask_subset(self) -> torch.Tensor:
+        frac = self.config.pixel_subset
+        if frac >= 1.0:
+            return self.mask
+        keep = torch.rand(self.mask.shape, generator=self.generator) < frac
+        sub = self.mask & keep
+        return sub if bool(sub.any()) else self.mask
+
+    def evaluate(self) -> float:
+        """The objective of the current parameters at the fixed seed (no gradients)."""
+        c = self.config
+        with torch.no_grad():
+            rad, depth = self.light.emitter()
+            self.escene.set_emitter(rad, depth)
+            img = self.escene.render(spp=c.eval_spp or c.spp, seed=c.seed + EVAL_SEED_OFFSET)
+            return float(self.terms(img, rad, depth, self.mask)["total"])
+
+    # ------------------------------------------------------------------ loop
+    def run(self, progress: bool = True, history_path: Path | None = None) -> FitResult:
+        from roomlight.render.bridge import render_differentiable
+
+        c = self.config
+        best = (float("inf"), -1, None)
+        history: list[dict] = []
+        nonfinite = 0
+        in_a_row = 0
+        log = open(history_path, "w") if history_path else None
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=c.iterations, desc="fit", unit="it", dynamic_ncols=True)
+        t_start = time.perf_counter()
+        try:
+            for it in range(c.iterations + 1):
+                record: dict = {"iteration": it}
+                if it % max(c.eval_every, 1) == 0 or it == c.iterations:
+                    value = self.evaluate()
+                    record["fixed_seed_loss"] = value
+                    if math.isfinite(value) and value < best[0]:
+                        best = (value, it, copy.deepcopy(self.light.state_dict()))
+                if it == c.iterations:
+                    history.append(record)
+                    if log:
+                        log.write(json.dumps(record) + "\n")
+                    break
+                t0 = time.perf_counter()
+                self.optimizer.zero_grad(set_to_none=True)
+                rad, depth = self.light.emitter()
+                seed = c.seed + 2 * it
+                img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1)
+                terms = self.terms(img, rad, depth, self._mask_subset())
+                loss = terms["total"]
+                ok = bool(torch.isfinite(loss))
+                if ok:
+                    loss.backward()
+                    ok = all(p.grad is None or bool(torch.isfinite(p.grad).all()) for p in self.params)
+                if ok:
+                    gnorm = float(torch.nn.utils.clip_grad_norm_(self.params, c.grad_clip))
+                    self.optimizer.step()
+                    in_a_row = 0
+                else:
+                    # Skip: parameters and Adam's moments stay as they were.
+                    self.optimizer.zero_grad(set_to_none=True)
+                    gnorm = float("nan")
+                    nonfinite += 1
+                    in_a_row += 1
+                    record["skipped_nonfinite"] = True
+                    if in_a_row >= MAX_NONFINITE_IN_A_ROW:
+                        raise RoomlightError(
+                            f"fit: {in_a_row} consecutive iterations (up to {it}) gave a non-finite loss or "
+                            "gradient; lower the learning rate or check the target image and scene")
+                record.update({k: float(v.detach()) for k, v in terms.items()})
+                record.update({"grad_norm": gnorm, "seconds": time.perf_counter() - t0, **self.light.describe()})
+                history.append(record)
+                if log:
+                    log.write(json.dumps(record) + "\n")
+                    log.flush()
+                if bar:
+                    bar.set_postfix(loss=f"{record['total']:.4g}", best=f"{best[0]:.4g}@{best[1]}")
+                    bar.update()
+        finally:
+            if bar:
+                bar.close()
+            if log:
+                log.close()
+        if best[2] is not None:
+            self.light.load_state_dict(best[2])
+        with torch.no_grad():
+            rad, depth = self.light.emitter()
+        return FitResult(method="", radiance=rad.detach().cpu().float(),
+                         depth=depth.detach().cpu().float() if depth is not None else None,
+                         emitter_kind=self.escene_kind(), history=history, best_iteration=best[1],
+                         best_loss=best[0], seconds=time.perf_counter() - t_start, nonfinite_steps=nonfinite,
+                         config=c.to_dict())
+
+    def escene_kind(self) -> str:
+        return str(self.escene.kind)

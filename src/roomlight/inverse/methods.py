@@ -1,0 +1,84 @@
+"""The fitting methods by name, and ``fit_scene`` which runs one on a scene description.
+
+=================  ======================================================================
+``prior``          z + log-exposure through the 2.5D area light (the paper's method)
+``prior-envmap``   the same prior, its radiance shown at infinity (env-map-prior comparison)
+``direct-al``      free log radiance + log depth, 2.5D area light, smoothness prior
+``direct-sphere``  free log radiance on a sphere proxy enclosing all objects (+20 %)
+``direct-envmap``  free log radiance as an env map
+=================  ======================================================================
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from roomlight.errors import RoomlightError
+from roomlight.inverse.config import FitConfig
+from roomlight.inverse.fit import FitResult, Fitter
+from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
+
+__all__ = ["METHODS", "make_light", "enclosing_sphere_radius", "build_fitter", "fit_scene"]
+
+METHODS = ("prior", "prior-envmap", "direct-al", "direct-sphere", "direct-envmap")
+
+
+def enclosing_sphere_radius(scene, margin: float = 0.2) -> float:
+    """Smallest origin-centred sphere enclosing every object of every view, enlarged by ``margin``."""
+    from roomlight.scene.build import object_geometry
+
+    r = max(float(np.linalg.norm(object_geometry(o)[0], axis=1).max()) for o in scene.objects.values())
+    return r * (1.0 + margin)
+
+
+def make_light(method: str, scene, config: FitConfig, model=None) -> LightModel:
+    """The light model of a method (``model``: a PanoVAE, needed by the prior methods)."""
+    if method not in METHODS:
+        raise RoomlightError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    if method.startswith("prior"):
+        if model is None:
+            raise RoomlightError(f"method {method!r} needs a trained prior: pass --model RUN_OR_CHECKPOINT")
+        return PriorLight(model, envmap=method == "prior-envmap", init_exposure=config.init_exposure,
+                          z_prior=config.z_prior, fit_depth_scale=config.fit_depth_scale)
+    radius = enclosing_sphere_radius(scene, config.sphere_margin)
+    kind = {"direct-al": "mesh", "direct-sphere": f"sphere:{radius:.6g}", "direct-envmap": "envmap"}[method]
+    return DirectLight(kind, config.direct_resolution, init_radiance=config.init_exposure, init_depth=radius,
+                       smooth_radiance=config.smooth_radiance, smooth_depth=config.smooth_depth)
+
+
+def build_fitter(scene, light: LightModel, config: FitConfig) -> Fitter:
+    """A :class:`Fitter` of ``light`` against the scene's view ``config.view``."""
+    from roomlight.render.scene import EmitterScene
+    from roomlight.scene.build import load_view_target, scene_points, view_objects
+
+    view = scene.view(config.view)
+    target, mask = load_view_target(view, config.image)
+    escene = EmitterScene(light.kind, light.resolution, objects=view_objects(scene, view),
+                          sensor=view.camera.sensor(),
+                          integrator={"type": "prb", "max_depth": int(config.max_depth)})
+    points = scene_points(scene, view.objects, config.repulsion_points, seed=config.seed) if light.has_depth else None
+    return Fitter(light, escene, target, mask, points, config)
+
+
+def fit_scene(scene, method: str, config: FitConfig | None = None, out_dir=None, model=None,
+              progress: bool = True, light: LightModel | None = None) -> FitResult:
+    """Fit ``method`` to the scene's view ``config.view``; write outputs to ``out_dir`` if given.
+
+    ``light`` replaces the method's default light model (e.g. a DirectLight started from a
+    given panorama); ``method`` then only names the result.
+    """
+    config = config or FitConfig()
+    light = light if light is not None else make_light(method, scene, config, model)
+    fitter = build_fitter(scene, light, config)
+    out = Path(out_dir) if out_dir is not None else None
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+    result = fitter.run(progress=progress, history_path=out / "history.jsonl" if out else None)
+    result.method = method
+    if out is not None:
+        from roomlight.inverse.outputs import write_fit_outputs
+
+        write_fit_outputs(out, result, fitter, target=fitter.target, mask=fitter.mask)
+    return result
