@@ -22,13 +22,14 @@ def cli():
       roomlight demo                       the built-in end-to-end example
       roomlight emitter PANO --out DIR     panorama -> emitter (PLY, EXR, Mitsuba XML)
       roomlight render DIR --out DIR       render a view of an emitter scene
+      roomlight fit SCENE --method M --out DIR   recover illumination from an image
     """
 
 
 def _register():
-    from roomlight.cli import demo, emitter, info, render
+    from roomlight.cli import demo, emitter, fit, info, render
 
-    for mod in (info, emitter, render, demo):
+    for mod in (info, emitter, render, fit, demo):
         cli.add_command(mod.command)
 
 

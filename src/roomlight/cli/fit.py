@@ -1,0 +1,58 @@
+"""``roomlight fit``: recover a scene's illumination from an image of known objects."""
+
+from __future__ import annotations
+
+import click
+
+from roomlight.inverse.config import FIT_PRESETS
+from roomlight.inverse.methods import METHODS
+
+
+@click.command("fit")
+@click.argument("scene", type=click.Path())
+@click.option("--method", type=click.Choice(METHODS), default="prior", show_default=True,
+              help="prior: the 2.5D prior (paper); prior-envmap: the prior shown at infinity; "
+                   "direct-al / direct-sphere / direct-envmap: per-pixel maps with a smoothness prior.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
+@click.option("--model", type=click.Path(), default=None,
+              help="Trained prior (a run folder or checkpoint directory) for the prior methods.")
+@click.option("--preset", type=click.Choice(list(FIT_PRESETS)), default="paper", show_default=True,
+              help="paper: the paper's settings (500 it, 64 spp); fast: a CPU-friendly setting.")
+@click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
+@click.option("--spp", type=int, default=None, help="Override: samples per pixel per step.")
+@click.option("--lr", type=float, default=None, help="Override: Adam learning rate.")
+@click.option("--seed", type=int, default=None, help="Override: base seed.")
+@click.option("--view", default=None, help="Scene view to fit (default: input).")
+@click.option("--image", type=click.Choice(["ldr", "hdr"]), default=None,
+              help="Fit the 8-bit recording (ldr, default) or the linear EXR (hdr).")
+@click.option("--margin", type=float, default=None, help="Repulsion margin in metres (default 0.05).")
+@click.option("--lambda-rep", type=float, default=None, help="Repulsion weight (default 0.1).")
+@click.option("--lambda-log", type=float, default=None, help="Log-term weight (default 0.1).")
+@click.option("--z-prior", type=float, default=None, help="Gaussian prior weight on the latent (real photos).")
+@click.option("--fit-depth-scale", is_flag=True, default=None, help="Also fit a global scale of the decoded depth.")
+@click.option("--pixel-subset", type=float, default=None, help="Fraction of object pixels in the loss per step.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def command(scene, method, out_dir, model, preset, quiet, **overrides):
+    """Fit the illumination of SCENE (a scene.json/.yaml or its directory) with --method.
+
+    Writes to --out: panorama.exr (recovered radiance + depth), emitter/ (PLY + Mitsuba XML),
+    history.jsonl (one line per iteration), loss.png, preview.png (target | render | error) and
+    result.json.
+    """
+    from roomlight.inverse import fit_config, fit_scene
+    from roomlight.scene import load_scene
+
+    spec = load_scene(scene)
+    cfg = fit_config(preset, **{k: v for k, v in overrides.items() if v is not None})
+    prior = None
+    if method.startswith("prior"):
+        if model is None:
+            raise click.UsageError(f"--method {method} needs --model (a trained prior)")
+        from roomlight.model import PanoVAE
+
+        prior = PanoVAE.from_pretrained(model)
+    result = fit_scene(spec, method, cfg, out_dir=out_dir, model=prior, progress=not quiet)
+    click.echo(f"{method}: best iteration {result.best_iteration} (fixed-seed loss {result.best_loss:.4g}) "
+               f"in {result.seconds:.1f} s -> {out_dir}")
+    if result.nonfinite_steps:
+        click.echo(f"note: {result.nonfinite_steps} step(s) had a non-finite loss or gradient and were skipped", err=True)
