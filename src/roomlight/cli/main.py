@@ -23,13 +23,14 @@ def cli():
       roomlight emitter PANO --out DIR     panorama -> emitter (PLY, EXR, Mitsuba XML)
       roomlight render DIR --out DIR       render a view of an emitter scene
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
+      roomlight bench make|run|report      the synthetic benchmark
     """
 
 
 def _register():
-    from roomlight.cli import demo, emitter, fit, info, render
+    from roomlight.cli import bench, demo, emitter, fit, info, render
 
-    for mod in (info, emitter, render, fit, demo):
+    for mod in (info, emitter, render, fit, bench, demo):
         cli.add_command(mod.command)
 
 

@@ -15,7 +15,8 @@ __all__ = ["object_geometry", "mitsuba_object", "view_objects", "object_points",
 
 
 @lru_cache(maxsize=64)
-def _mesh_file(path: str) -> tuple[np.ndarray, np.ndarray]:
+def _mesh_file(path: str, mtime_ns: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mesh file contents; cached per (path, modification time) so edits are seen."""
     from roomlight.render.variant import mitsuba
 
     mi = mitsuba()
@@ -38,7 +39,7 @@ def object_geometry(obj: ObjectSpec) -> tuple[np.ndarray, np.ndarray]:
         v, f = builtin_shape(obj.shape)
         v, f = v.astype(np.float64), f.astype(np.int64)
     else:
-        v, f = _mesh_file(str(obj.mesh))
+        v, f = _mesh_file(str(obj.mesh), Path(obj.mesh).stat().st_mtime_ns)
     m = obj.matrix()
     return v @ m[:3, :3].T + m[:3, 3], f
 

@@ -139,7 +139,10 @@ class MaterialSpec:
                 params[key] = list(_vec(params[key], f"{where}.{key}"))
         for key in ("alpha", "roughness", "metallic"):
             if key in params:
-                v = float(params[key])
+                try:
+                    v = float(params[key])
+                except (TypeError, ValueError):
+                    v = float("nan")
                 if not 0 <= v <= 1:
                     raise SceneError(f"{where}.{key}: expected a value in [0, 1], got {params[key]!r}")
                 params[key] = v
@@ -339,8 +342,34 @@ def parse_scene(data: dict, root: Path, where: str = "scene") -> SceneSpec:
                      _get(data, "metadata", where, dict, default={}))
 
 
-def load_scene(path) -> SceneSpec:
-    """Read and validate a scene description (``.json``, ``.yaml`` or ``.yml``)."""
+def check_scene_files(scene: SceneSpec) -> None:
+    """Read every file a scene names (emitter panorama, meshes, images, masks), so that a corrupt
+    one is reported now, by name, rather than in the middle of a fit."""
+    from roomlight.errors import RoomlightError as _Base
+    from roomlight.scene.build import load_view_target, object_geometry
+
+    if scene.emitter is not None:
+        scene.emitter.load()  # raises InputFileError naming the file
+    for obj in scene.objects.values():
+        if obj.mesh is not None:
+            object_geometry(obj)
+    for view in scene.views.values():
+        if view.image is not None or view.ldr is not None:
+            for prefer in ("ldr", "hdr"):
+                try:
+                    load_view_target(view, prefer)
+                except SceneError:
+                    raise
+                except _Base as exc:
+                    raise SceneError(str(exc)) from None
+
+
+def load_scene(path, check_files: bool = True) -> SceneSpec:
+    """Read and validate a scene description (``.json``, ``.yaml`` or ``.yml``).
+
+    With ``check_files`` (default) every referenced file is also read once, so an unreadable
+    panorama, mesh, image or mask is rejected up front with its name.
+    """
     p = Path(path)
     if p.is_dir():
         for name in ("scene.json", "scene.yaml", "scene.yml"):
@@ -359,7 +388,10 @@ def load_scene(path) -> SceneSpec:
             data = json.loads(text)
     except Exception as exc:
         raise SceneError(f"{p}: not valid {'YAML' if p.suffix.lower() in ('.yaml', '.yml') else 'JSON'}: {exc}") from None
-    return parse_scene(data, p.parent, where=p.name)
+    scene = parse_scene(data, p.parent, where=p.name)
+    if check_files:
+        check_scene_files(scene)
+    return scene
 
 
 def save_scene(scene: SceneSpec, path) -> Path:

@@ -1,0 +1,257 @@
+"""``roomlight bench report``: the paper's Table 2 from a results folder, as Markdown, CSV and JSON.
+
+Layout (Table 2): one row per method (with its emitter representation), one column per
+metric x material, each cell the mean +- standard deviation over the scenes of that material
+(``np.std``, i.e. population std, ddof = 0). The evaluation view (the probe) is Table 2; the
+input view (the fitted objects) is the supplementary "fitted view" table.
+
+Files written to ``OUT`` (default ``RES/report``):
+
+- ``report.md``     both tables, case counts, failed cases, mean fit time per method
+- ``table.csv``     the evaluation-view table, wide: ``<metric>_<material>_{mean,std,n}``
+- ``table_input.csv`` the same for the input view
+- ``cases.csv``     one row per case and view with every metric (long format)
+- ``summary.json``  ``{"views": {view: {method: {material: {metric: {mean, std, n}}}}}, ...}``
+- ``figures/*.png`` and ``index.html`` (see :mod:`roomlight.bench.figures`)
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from roomlight.bench.errors import BenchError
+from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
+from roomlight.bench.runner import RESULT
+
+__all__ = ["METRIC_LABELS", "METHOD_ORDER", "collect_results", "collect_failures", "summarize",
+           "representation", "markdown_table", "write_tables", "write_report"]
+
+METRIC_LABELS = {"psnr_ldr": "PSNR LDR ↑", "rmse_hdr": "RMSE HDR ↓", "angular_error": "RGB angular error (°) ↓"}
+#: Row order of the table (the paper's: smoothness baselines, then the priors); others follow.
+METHOD_ORDER = ("direct-envmap", "direct-sphere", "direct-al", "prior-envmap", "prior", "oracle")
+MATERIAL_ORDER = ("diffuse", "matte", "mirror")
+VIEWS = ("eval", "input")
+
+
+def collect_results(res_dir) -> list[dict]:
+    """Every ``result.json`` under ``RES/cases`` (sorted by scene, then method)."""
+    root = Path(res_dir) / "cases"
+    if not root.is_dir():
+        raise BenchError(f"{res_dir}: no results (expected {root}; run `roomlight bench run` first)")
+    bench = None
+    run_file = Path(res_dir) / "run.json"
+    if run_file.is_file():
+        try:
+            bench = json.loads(run_file.read_text()).get("bench")
+        except ValueError:
+            bench = None
+    out = []
+    for f in sorted(root.rglob(RESULT)):
+        if f.parent.name == "fit":
+            continue
+        try:
+            rec = json.loads(f.read_text())
+        except ValueError as exc:
+            raise BenchError(f"{f}: not valid JSON: {exc}") from None
+        if not all(k in rec for k in ("scene", "method", "material", "metrics")):
+            continue
+        rec["_dir"] = str(f.parent)
+        if not rec.get("scene_path") and bench:
+            rec["scene_path"] = str(Path(bench) / rec["scene"] / "scene.json")
+        out.append(rec)
+    return out
+
+
+def collect_failures(res_dir) -> list[dict]:
+    """Every ``error.json`` of a case without a result."""
+    root = Path(res_dir) / "cases"
+    out = []
+    for f in sorted(root.rglob("error.json")) if root.is_dir() else []:
+        if not (f.parent / RESULT).is_file():
+            try:
+                out.append(json.loads(f.read_text()))
+            except ValueError:
+                out.append({"case": str(f.parent), "error": "unreadable error.json"})
+    return out
+
+
+def _ordered(values, order) -> list[str]:
+    vals = sorted(set(values))
+    return [v for v in order if v in vals] + [v for v in vals if v not in order]
+
+
+def representation(kind: str) -> str:
+    """Display name of an emitter kind (``mesh``, ``envmap``, ``sphere:R``)."""
+    if kind.startswith("sphere"):
+        return "Sphere proxy"
+    return {"mesh": "2.5D AL", "envmap": "Env map"}.get(kind, kind)
+
+
+def summarize(records: list[dict], view: str = "eval") -> dict:
+    """``{method: {material: {metric: {"mean", "std", "n"}}}}`` over the records of one view."""
+    groups: dict = {}
+    for r in records:
+        m = r["metrics"].get(view)
+        if m is None:
+            continue
+        g = groups.setdefault(r["method"], {}).setdefault(r["material"], {k: [] for k in METRICS})
+        for k in METRICS:
+            g[k].append(float(m[k]))
+    out: dict = {}
+    for method, mats in groups.items():
+        for mat, vals in mats.items():
+            for k, v in vals.items():
+                a = np.asarray(v, np.float64)
+                out.setdefault(method, {}).setdefault(mat, {})[k] = {
+                    "mean": float(a.mean()), "std": float(a.std()) if np.isfinite(a).all() else float("nan"),
+                    "n": int(a.size)}
+    return out
+
+
+def _fmt(x: float, metric: str) -> str:
+    if math.isinf(x):
+        return "inf"
+    if math.isnan(x):
+        return "nan"
+    return f"{x:.2f}" if metric == "psnr_ldr" else f"{x:.3f}"
+
+
+def _best(summary: dict, methods, material: str, metric: str) -> str | None:
+    vals = [(summary[m][material][metric]["mean"], m) for m in methods
+            if m != "oracle" and material in summary.get(m, {})]
+    vals = [(v, m) for v, m in vals if not math.isnan(v)]
+    if len(vals) < 2:
+        return None
+    return (max if HIGHER_IS_BETTER[metric] else min)(vals)[1]
+
+
+def _kinds(records) -> dict[str, str]:
+    kinds: dict[str, set] = {}
+    for r in records:
+        kinds.setdefault(r["method"], set()).add(representation(r.get("emitter_kind", "?")))
+    return {m: "/".join(sorted(k)) for m, k in kinds.items()}
+
+
+def markdown_table(records: list[dict], view: str = "eval") -> str:
+    """The Table 2 layout as Markdown (best mean per column in bold; the oracle never counts)."""
+    summary = summarize(records, view)
+    if not summary:
+        return "_no results for this view_\n"
+    methods = _ordered(summary, METHOD_ORDER)
+    materials = _ordered([mat for m in summary.values() for mat in m], MATERIAL_ORDER)
+    kinds = _kinds(records)
+    head = ["Method", "Emitter"] + [f"{METRIC_LABELS[k]} {mat}" for k in METRICS for mat in materials]
+    lines = ["| " + " | ".join(head) + " |", "|" + "|".join(["---"] * 2 + [":---:"] * (len(head) - 2)) + "|"]
+    best = {(k, mat): _best(summary, methods, mat, k) for k in METRICS for mat in materials}
+    for m in methods:
+        cells = [m, kinds.get(m, "")]
+        for k in METRICS:
+            for mat in materials:
+                s = summary[m].get(mat, {}).get(k)
+                if s is None:
+                    cells.append("–")
+                    continue
+                text = f"{_fmt(s['mean'], k)} ± {_fmt(s['std'], k)}"
+                cells.append(f"**{text}**" if best[(k, mat)] == m else text)
+        lines.append("| " + " | ".join(cells) + " |")
+    n = {mat: max(summary[m].get(mat, {}).get(METRICS[0], {}).get("n", 0) for m in methods) for mat in materials}
+    lines.append("")
+    lines.append("Scenes per material: " + ", ".join(f"{mat} {n[mat]}" for mat in materials) + ".")
+    return "\n".join(lines) + "\n"
+
+
+def _wide_csv(path: Path, records: list[dict], view: str) -> None:
+    summary = summarize(records, view)
+    methods = _ordered(summary, METHOD_ORDER)
+    materials = _ordered([mat for m in summary.values() for mat in m], MATERIAL_ORDER)
+    kinds = _kinds(records)
+    cols = [f"{k}_{mat}_{s}" for k in METRICS for mat in materials for s in ("mean", "std", "n")]
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["method", "emitter"] + cols)
+        for m in methods:
+            row = [m, kinds.get(m, "")]
+            for k in METRICS:
+                for mat in materials:
+                    s = summary[m].get(mat, {}).get(k)
+                    row += [s["mean"], s["std"], s["n"]] if s else ["", "", 0]
+            w.writerow(row)
+
+
+def _cases_csv(path: Path, records: list[dict]) -> None:
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["scene", "panorama", "material", "method", "emitter_kind", "view", *METRICS, "pixels",
+                    "fit_seconds", "best_iteration"])
+        for r in records:
+            for view in VIEWS:
+                m = r["metrics"].get(view)
+                if m:
+                    w.writerow([r["scene"], r.get("panorama", ""), r["material"], r["method"],
+                                r.get("emitter_kind", ""), view, *[m[k] for k in METRICS], m.get("pixels", ""),
+                                r.get("fit_seconds", ""), r.get("best_iteration", "")])
+
+
+def _timing(records: list[dict]) -> dict[str, dict]:
+    t: dict[str, list] = {}
+    for r in records:
+        if r.get("fit_seconds") is not None:
+            t.setdefault(r["method"], []).append(float(r["fit_seconds"]))
+    return {m: {"mean_fit_seconds": float(np.mean(v)), "cases": len(v)} for m, v in t.items()}
+
+
+def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]:
+    """Write report.md, table.csv, table_input.csv, cases.csv and summary.json; return their paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    failures = failures or []
+    paths = {"csv": out / "table.csv", "csv_input": out / "table_input.csv", "cases": out / "cases.csv",
+             "json": out / "summary.json", "markdown": out / "report.md"}
+    _wide_csv(paths["csv"], records, "eval")
+    _wide_csv(paths["csv_input"], records, "input")
+    _cases_csv(paths["cases"], records)
+    timing = _timing(records)
+    summary = {"views": {v: summarize(records, v) for v in VIEWS}, "cases": len(records),
+               "scenes": len({r["scene"] for r in records}),
+               "methods": _ordered({r["method"] for r in records}, METHOD_ORDER),
+               "materials": _ordered({r["material"] for r in records}, MATERIAL_ORDER),
+               "timing": timing, "failed": [f.get("case", "?") for f in failures],
+               "std": "population standard deviation over scenes (ddof = 0)"}
+    paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
+    md = ["# Benchmark results", "",
+          f"{len(records)} cases, {summary['scenes']} scenes. Cells: mean ± std over scenes; best in bold.", "",
+          "## Evaluation view (probe sphere) — paper Table 2", "", markdown_table(records, "eval"),
+          "## Input view (fitted objects) — supplementary fitted-view table", "", markdown_table(records, "input"),
+          "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
+    for m in _ordered(timing, METHOD_ORDER):
+        md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")
+    if failures:
+        md += ["", "## Failed cases", ""]
+        md += [f"- `{f.get('case', '?')}`: {f.get('type', '')}: {f.get('error', '')}" for f in failures]
+    paths["markdown"].write_text("\n".join(md) + "\n")
+    return paths
+
+
+def write_report(res_dir, out_dir=None, figures: bool = True, progress: bool = True) -> dict[str, Path]:
+    """Tables, per-scene figures and ``index.html`` of a results folder (see the module docstring)."""
+    records = collect_results(res_dir)
+    if not records:
+        raise BenchError(f"{res_dir}: no finished case (no result.json under {Path(res_dir) / 'cases'})")
+    failures = collect_failures(res_dir)
+    out = Path(out_dir) if out_dir else Path(res_dir) / "report"
+    paths = write_tables(records, out, failures)
+    figs: dict[str, Path] = {}
+    if figures:
+        from roomlight.bench.figures import scene_figures
+
+        figs = scene_figures(records, out / "figures", progress=progress)
+    from roomlight.bench.figures import write_index
+
+    paths["html"] = write_index(out, records, figs)
+    paths.update({f"figure:{k}": v for k, v in figs.items()})
+    return paths

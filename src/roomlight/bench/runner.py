@@ -1,0 +1,317 @@
+"""``roomlight bench run``: fit every benchmark scene with every method and score the result.
+
+For each case (scene x method), in manifest order:
+
+1. ``fit_scene(scene, method, config, out_dir=CASE/fit, model=...)`` fits the input view;
+2. the input and evaluation views are re-rendered under the recovered emitter at ``eval_spp``
+   (seeds differ from the ground truth's, so the two renders have independent noise);
+3. both are scored against the ground-truth HDR renders over the views' masks
+   (:mod:`roomlight.bench.metrics`).
+
+Layout of ``RES``::
+
+    RES/run.json                                   settings (checked on resume)
+    RES/cases/<panorama>/<material>/<method>/
+        result.json      metrics, timings, emitter kind (written last: marks the case done)
+        recovered.exr    recovered radiance (+ Z depth when it has one)
+        input.exr, eval.exr                        renders under the recovered emitter
+        fit/             the fit's own outputs (history, emitter bundle, loss curve, ...)
+        error.json       instead of result.json when the case failed (retried on the next run)
+
+The pseudo-method ``oracle`` (not a fit) returns the ground-truth emitter itself: its scores are
+the Monte-Carlo noise floor of the metrics at ``eval_spp`` against the ground truth's ``spp``.
+
+Runs resume: a case with a ``result.json`` is skipped. ``shard=(i, n)`` takes cases
+``i, i + n, i + 2n, ...`` of the full list, so ``n`` processes (or machines sharing ``RES``)
+split the work without overlap.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from roomlight.bench.builder import read_manifest
+from roomlight.bench.errors import BenchError
+from roomlight.bench.metrics import score_view
+from roomlight.bench.rendering import render_view
+
+__all__ = ["Case", "RunSummary", "EVAL_SEEDS", "parse_shard", "list_cases", "run_case", "run_benchmark",
+           "known_methods", "oracle_fit", "ORACLE", "RESULT", "RUN_FILE"]
+
+RESULT = "result.json"
+#: Pseudo-method: the ground-truth emitter, re-rendered (the metrics' noise floor).
+ORACLE = "oracle"
+RUN_FILE = "run.json"
+#: Seeds of the re-renders under recovered emitters (the ground truth used 0 and 1 << 20).
+EVAL_SEEDS = {"input": 7_000_001, "eval": 7_000_001 + (1 << 20)}
+VIEWS = ("input", "eval")
+
+
+@dataclass(frozen=True)
+class Case:
+    """One (scene, method) pair."""
+
+    scene_id: str        #: ``<panorama>/<material>``
+    scene_path: Path     #: its scene.json
+    panorama: str
+    material: str
+    method: str
+
+    def directory(self, out: Path) -> Path:
+        return Path(out) / "cases" / self.scene_id / self.method
+
+
+@dataclass
+class RunSummary:
+    """What one call of :func:`run_benchmark` did."""
+
+    done: list[str] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    failed: dict[str, str] = field(default_factory=dict)
+
+
+def parse_shard(text: str | tuple | None) -> tuple[int, int]:
+    """``"i/n"`` (0 <= i < n) -> (i, n); None -> (0, 1)."""
+    if text is None:
+        return 0, 1
+    if isinstance(text, tuple):
+        i, n = text
+    else:
+        try:
+            a, b = str(text).split("/")
+            i, n = int(a), int(b)
+        except ValueError:
+            raise BenchError(f"--shard: expected i/n such as 0/4, got {text!r}") from None
+    if not (n >= 1 and 0 <= i < n):
+        raise BenchError(f"--shard: need 0 <= i < n, got {i}/{n}")
+    return i, n
+
+
+def list_cases(bench_dir, methods, shard=(0, 1)) -> list[Case]:
+    """Every (scene, method) case of the benchmark, in manifest x method order, then sharded."""
+    bench = Path(bench_dir)
+    manifest = read_manifest(bench)
+    cases = []
+    for s in manifest["scenes"]:
+        for m in methods:
+            cases.append(Case(s["id"], bench / s["scene"], s["panorama"], s["material"], m))
+    i, n = shard
+    return cases[i::n]
+
+
+def _write_json(path: Path, data) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(data, indent=2, default=_json_default))
+    os.replace(tmp, path)
+
+
+def _json_default(obj):
+    if isinstance(obj, (np.generic,)):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, tuple):
+        return list(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def _write_recovered(path: Path, result) -> None:
+    from roomlight.emitter.sphere import sphere_depth
+    from roomlight.io import write_panorama
+    from roomlight.render.scene import parse_emitter_kind
+
+    rad = result.radiance.detach().float().cpu()
+    depth = result.depth
+    kind = parse_emitter_kind(result.emitter_kind)
+    if depth is None and kind.name == "sphere":
+        depth = sphere_depth(rad.shape[0], rad.shape[1], kind.radius)
+    write_panorama(path, (rad.numpy(), None if depth is None else depth.detach().float().cpu().numpy()),
+                   half=False, metadata={"emitter_kind": str(result.emitter_kind)})
+
+
+def _write_render(path: Path, img: torch.Tensor) -> None:
+    from roomlight.io import write_exr
+
+    a = img.detach().float().cpu().numpy()
+    write_exr(path, {"R": a[..., 0], "G": a[..., 1], "B": a[..., 2]}, half=False)
+
+
+def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: int = 256,
+             max_depth: int = 4, progress: bool = True) -> dict:
+    """Fit, re-render and score one case; writes its directory and returns the result record.
+
+    Args:
+        fit: the fitting function, ``fit(scene, method, config, out_dir=..., model=..., progress=...)``
+            returning an object with ``radiance`` (H, W, 3), ``depth`` (H, W) or None,
+            ``emitter_kind``, and optionally ``history``, ``best_iteration``, ``seconds``.
+    """
+    from roomlight.scene.build import load_view_target
+    from roomlight.scene.description import load_scene
+
+    cdir = case.directory(out_dir)
+    cdir.mkdir(parents=True, exist_ok=True)
+    scene = load_scene(case.scene_path)
+    t0 = time.perf_counter()
+    if case.method == ORACLE:
+        result = oracle_fit(scene)
+    else:
+        result = fit(scene, case.method, fit_config, out_dir=cdir / "fit", model=model, progress=progress)
+    fit_seconds = time.perf_counter() - t0
+    _write_recovered(cdir / "recovered.exr", result)
+    t1 = time.perf_counter()
+    metrics = {}
+    for view in VIEWS:
+        v = scene.view(view)
+        gt, mask = load_view_target(v, prefer="hdr")
+        img = render_view(scene, v, result.radiance, result.depth, str(result.emitter_kind), eval_spp,
+                          EVAL_SEEDS[view], max_depth)
+        _write_render(cdir / f"{view}.exr", img)
+        metrics[view] = score_view(img, gt, mask)
+    history = list(getattr(result, "history", []) or [])
+    record = {
+        "scene": case.scene_id, "scene_path": str(Path(case.scene_path).resolve()), "panorama": case.panorama,
+        "material": case.material, "method": case.method,
+        "emitter_kind": str(result.emitter_kind), "metrics": metrics,
+        "fit_seconds": float(getattr(result, "seconds", 0.0) or fit_seconds),
+        "wall_seconds": fit_seconds, "eval_seconds": time.perf_counter() - t1,
+        "best_iteration": getattr(result, "best_iteration", None),
+        "iterations": sum(1 for h in history if "total" in h) if history else None,
+        "nonfinite_steps": getattr(result, "nonfinite_steps", None),
+        "recovered_resolution": list(result.radiance.shape[:2]), "eval_spp": eval_spp,
+        "files": {"recovered": "recovered.exr", "input": "input.exr", "eval": "eval.exr", "fit": "fit"},
+    }
+    err = cdir / "error.json"
+    if err.exists():
+        err.unlink()
+    _write_json(cdir / RESULT, record)
+    return record
+
+
+@dataclass
+class OracleResult:
+    """The ground-truth emitter in the shape of a fit result."""
+
+    radiance: torch.Tensor
+    depth: torch.Tensor
+    emitter_kind: str = "mesh"
+    history: list = field(default_factory=list)
+    best_iteration: int | None = None
+    seconds: float = 0.0
+
+
+def oracle_fit(scene) -> OracleResult:
+    """The scene's ground-truth emitter (radiance (H, W, 3), depth (H, W)) as a result."""
+    if scene.emitter is None:
+        raise BenchError(f"{scene.root}: the scene has no emitter; the oracle needs the ground truth")
+    pano = scene.emitter.load()
+    if pano.depth is None:
+        raise BenchError(f"{scene.emitter.panorama}: the ground-truth emitter has no depth")
+    return OracleResult(torch.from_numpy(pano.radiance), torch.from_numpy(pano.depth))
+
+
+def _default_fit():
+    try:
+        from roomlight.inverse import fit_scene
+    except ImportError as exc:  # pragma: no cover - the package ships it
+        raise BenchError(f"bench run: the fitting methods (roomlight.inverse) cannot be imported: {exc}") from None
+    return fit_scene
+
+
+def known_methods() -> tuple[str, ...]:
+    """The fitting methods ``bench run`` accepts (``roomlight.inverse.METHODS``)."""
+    from roomlight.inverse import METHODS
+
+    return tuple(METHODS)
+
+
+def _check_run_file(out: Path, settings: dict) -> None:
+    f = out / RUN_FILE
+    if f.is_file():
+        try:
+            old = json.loads(f.read_text())
+        except ValueError:
+            old = None
+        if isinstance(old, dict):
+            for key in ("fit_config", "eval_spp", "max_depth"):
+                if key in old and old[key] != settings[key]:
+                    raise BenchError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
+                                     f"now {settings[key]!r}); use another --out, or delete it to start over")
+    _write_json(f, settings)
+
+
+def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = 256,
+                  shard=(0, 1), max_depth: int = 4, progress: bool = True, fit=None) -> RunSummary:
+    """Run (a shard of) the benchmark; see the module docstring.
+
+    Args:
+        bench_dir: a directory written by ``roomlight bench make``.
+        out_dir: results folder ``RES``.
+        methods: method names (default: every method of ``roomlight.inverse.METHODS``).
+        fit_config: a ``roomlight.inverse.FitConfig`` (default: the fitter's own defaults).
+        model: the prior (a ``PanoVAE``) for the ``prior*`` methods.
+        eval_spp: samples per pixel of the re-renders (paper: 4096).
+        shard: (i, n), see :func:`parse_shard`.
+        fit: the fitting function (default ``roomlight.inverse.fit_scene``).
+    """
+    if fit is None:
+        fit = _default_fit()
+        allowed = known_methods()
+        bad = [m for m in (methods or ()) if m not in allowed + (ORACLE,)]
+        if bad:
+            raise BenchError(f"--methods: unknown method(s) {', '.join(bad)}; choose from "
+                             f"{', '.join(allowed + (ORACLE,))}")
+    methods = tuple(methods) if methods else known_methods()
+    bench = Path(bench_dir).resolve()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg_dict = fit_config.to_dict() if hasattr(fit_config, "to_dict") else (
+        dict(vars(fit_config)) if fit_config is not None else None)
+    settings = {"bench": str(bench), "methods": list(methods),
+                "fit_config": json.loads(json.dumps(cfg_dict, default=_json_default)),
+                "eval_spp": eval_spp, "max_depth": max_depth}
+    _check_run_file(out, settings)
+    cases = list_cases(bench, methods, shard)
+    summary = RunSummary()
+    todo = []
+    for c in cases:
+        if (c.directory(out) / RESULT).is_file():
+            summary.skipped.append(f"{c.scene_id}/{c.method}")
+        else:
+            todo.append(c)
+    bar = None
+    if progress and todo:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(todo), desc="bench run", unit="case", dynamic_ncols=True)
+    try:
+        for c in todo:
+            name = f"{c.scene_id}/{c.method}"
+            if bar is not None:
+                bar.set_postfix_str(name)
+            try:
+                run_case(c, out, fit, fit_config, model, eval_spp, max_depth, progress)
+                summary.done.append(name)
+            except KeyboardInterrupt:
+                raise
+            except Exception as exc:  # one failed case must not stop a long run
+                summary.failed[name] = f"{type(exc).__name__}: {exc}"
+                cdir = c.directory(out)
+                cdir.mkdir(parents=True, exist_ok=True)
+                _write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
+                                                  "traceback": traceback.format_exc()})
+                if bar is not None:
+                    bar.write(f"bench run: {name} failed: {type(exc).__name__}: {exc}")
+            if bar is not None:
+                bar.update()
+    finally:
+        if bar is not None:
+            bar.close()
+    return summary

@@ -1,0 +1,142 @@
+"""``roomlight bench``: the synthetic benchmark (build it, run the methods on it, report)."""
+
+from __future__ import annotations
+
+import click
+
+from roomlight.cli.common import RESOLUTION, RoomlightGroup
+
+#: ``--paper`` settings of ``bench make`` (supplementary "Synthetic scene design").
+PAPER_MAKE = {"emitter_height": 512, "width": 1000, "height": 1000, "spp": 4096}
+#: ``--paper`` setting of ``bench run`` (ground-truth comparisons at 4096 spp).
+PAPER_EVAL_SPP = 4096
+
+
+def _csv(value):
+    if value is None:
+        return None
+    items = tuple(s.strip() for s in str(value).split(",") if s.strip())
+    return items or None
+
+
+@click.group("bench", cls=RoomlightGroup)
+def command():
+    """The synthetic benchmark of the paper (§4.2): make scenes, fit them, report Table 2.
+
+    \b
+      roomlight bench make --panos PANOS/ --out bench/        scenes from panoramas with depth
+      roomlight bench run bench/ --out res/ --model RUN       fit and score every method
+      roomlight bench report res/                             tables, figures, index.html
+    """
+
+
+@command.command("make")
+@click.option("--panos", required=True, type=click.Path(),
+              help="Folder of panorama EXRs (R, G, B + Z depth), or one EXR.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Benchmark folder to write.")
+@click.option("--n", type=int, default=25, show_default=True, help="Use the first N panoramas (sorted by name).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Base seed of the placements.")
+@click.option("--paper", is_flag=True, help="The paper's settings: emitter 512x1024, images 1000x1000, 4096 spp.")
+@click.option("--emitter-res", "emitter_height", type=int, default=None,
+              help="Emitter height H (width 2H) the panoramas are resampled to [default: 128].")
+@click.option("--res", type=RESOLUTION, default=None, help="Image size WIDTHxHEIGHT [default: 128x128].")
+@click.option("--spp", type=int, default=None, help="Samples per pixel of the ground-truth renders [default: 256].")
+@click.option("--fov", type=float, default=None, help="Horizontal field of view in degrees [default: 65].")
+@click.option("--materials", default=None, help="Comma-separated materials [default: diffuse,matte,mirror].")
+@click.option("--shapes", default=None,
+              help="Comma-separated input-view shapes: built-in names or .ply/.obj files; more than two: "
+                   "two are drawn per panorama [default: knot,spiky].")
+@click.option("--key", type=float, default=None, help="Exposure key: objects' log-average luminance [default: 0.18].")
+@click.option("--overwrite", is_flag=True, help="Rebuild panoramas that are already built.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, materials, shapes, key, overwrite, quiet):
+    """Build benchmark scenes from the panoramas in --panos (one per panorama and material).
+
+    Writes OUT/<panorama>/<material>/scene.json with the ground-truth emitter, linear EXR and
+    8-bit renders of the input and evaluation views, and masks; and OUT/manifest.json. An
+    interrupted build resumes where it stopped.
+    """
+    from roomlight.bench.builder import BenchConfig, make_benchmark
+
+    cfg = BenchConfig(n=n, seed=seed)
+    if paper:
+        cfg = cfg.override(**PAPER_MAKE)
+    width, height = res if res else (None, None)
+    cfg = cfg.override(emitter_height=emitter_height, width=width, height=height, spp=spp, fov=fov,
+                       materials=_csv(materials), shapes=_csv(shapes), key=key)
+    manifest = make_benchmark(panos, out_dir, cfg, overwrite=overwrite, progress=not quiet)
+    click.echo(f"{len(manifest['panoramas'])} panoramas x {len(cfg.materials)} materials = "
+               f"{len(manifest['scenes'])} scenes -> {out_dir}")
+
+
+@command.command("run")
+@click.argument("bench", type=click.Path())
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
+@click.option("--methods", default=None,
+              help="Comma-separated methods [default: all]; 'oracle' re-renders the true emitter (noise floor).")
+@click.option("--model", type=click.Path(), default=None,
+              help="Trained prior (run folder or checkpoint) for the prior methods.")
+@click.option("--preset", default="paper", show_default=True, help="Fit preset: paper (500 it, 64 spp) or fast.")
+@click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
+@click.option("--fit-spp", type=int, default=None, help="Override: samples per pixel per fitting step.")
+@click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
+              help="Override any fit setting, e.g. --set lr=0.05 (repeatable).")
+@click.option("--eval-spp", type=int, default=None, help="Samples per pixel of the scoring re-renders [default: 256].")
+@click.option("--paper", is_flag=True, help="Score at the paper's 4096 spp.")
+@click.option("--shard", default=None, metavar="I/N", help="Run only cases I, I+N, I+2N, ... (0 <= I < N).")
+@click.option("--quiet", is_flag=True, help="No progress bars.")
+def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_spp, paper, shard, quiet):
+    """Fit every scene of BENCH with each method, re-render both views and score them.
+
+    Each case writes OUT/cases/<panorama>/<material>/<method>/result.json; finished cases are
+    skipped, so re-running resumes. Failed cases are reported and retried on the next run.
+    """
+    import yaml
+
+    from roomlight.bench.runner import parse_shard, run_benchmark
+    from roomlight.inverse import fit_config
+
+    overrides = {"iterations": iterations, "spp": fit_spp}
+    for s in sets:
+        if "=" not in s:
+            raise click.BadParameter(f"expected FIELD=VALUE, got {s!r}", param_hint="--set")
+        k, v = s.split("=", 1)
+        overrides[k.strip().replace("-", "_")] = yaml.safe_load(v)
+    cfg = fit_config(preset, **{k: v for k, v in overrides.items() if v is not None})
+    method_list = _csv(methods)
+    from roomlight.bench.runner import known_methods
+
+    needs_prior = [m for m in (method_list or known_methods()) if m.startswith("prior")]
+    prior = None
+    if needs_prior:
+        if model is None:
+            raise click.UsageError(f"methods {', '.join(needs_prior)} need --model (a trained prior); "
+                                   "or choose --methods without them")
+        from roomlight.model import PanoVAE
+
+        prior = PanoVAE.from_pretrained(model)
+    spp = eval_spp if eval_spp is not None else (PAPER_EVAL_SPP if paper else 256)
+    summary = run_benchmark(bench, out_dir, method_list, cfg, prior, eval_spp=spp, shard=parse_shard(shard),
+                            progress=not quiet)
+    click.echo(f"bench run: {len(summary.done)} done, {len(summary.skipped)} already done, "
+               f"{len(summary.failed)} failed -> {out_dir}")
+    for name, err in summary.failed.items():
+        click.echo(f"  failed {name}: {err}", err=True)
+    if summary.failed:
+        raise SystemExit(1)
+
+
+@command.command("report")
+@click.argument("results", type=click.Path())
+@click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
+              help="Report folder [default: RESULTS/report].")
+@click.option("--no-figures", is_flag=True, help="Tables only (no per-scene figures).")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def report(results, out_dir, no_figures, quiet):
+    """Table 2 (method x material x metric, mean ± std) of RESULTS as Markdown, CSV and JSON,
+    a figure per scene, and index.html."""
+    from roomlight.bench.report import write_report
+
+    paths = write_report(results, out_dir, figures=not no_figures, progress=not quiet)
+    click.echo(paths["markdown"].read_text())
+    click.echo(f"report -> {paths['html']}")
