@@ -22,15 +22,17 @@ def cli():
       roomlight demo                       the built-in end-to-end example
       roomlight emitter PANO --out DIR     panorama -> emitter (PLY, EXR, Mitsuba XML)
       roomlight render DIR --out DIR       render a view of an emitter scene
+      roomlight train --data DIR --out RUN     train the prior on panoramas
+      roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
       roomlight bench make|run|report      the synthetic benchmark
     """
 
 
 def _register():
-    from roomlight.cli import bench, demo, emitter, fit, info, render
+    from roomlight.cli import bench, convert, data, demo, emitter, eval_prior, fit, fit_pano, info, render, sample, train
 
-    for mod in (info, emitter, render, fit, bench, demo):
+    for mod in (info, emitter, render, data, train, fit_pano, eval_prior, sample, convert, fit, bench, demo):
         cli.add_command(mod.command)
 
 

@@ -1,0 +1,57 @@
+"""``roomlight eval-prior``: score the prior's encoder pass and latent fits on a panorama folder."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+
+@click.command("eval-prior")
+@click.option("--model", "model_path", required=True, type=click.Path(exists=True),
+              help="Model directory, training run (uses RUN/best) or the authors' run folder.")
+@click.option("--data", "data_dir", required=True, type=click.Path(exists=True, file_okay=False),
+              help="Folder of panoramas with depth (a test/ sub-folder is used when present).")
+@click.option("--split", type=click.Choice(["auto", "train", "val", "test", "all"]), default="auto", show_default=True,
+              help="auto: test/ if the folder has one, else every file.")
+@click.option("--fit-steps", type=int, default=1500, show_default=True,
+              help="Latent-fit iterations; 0 skips the fit row.")
+@click.option("--depth-only", is_flag=True, help="Add a depth-only latent-fit row.")
+@click.option("--limit", type=int, default=None, help="Evaluate at most this many panoramas.")
+@click.option("--batch-size", type=int, default=8, show_default=True)
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
+              help="Where eval_prior.md / .json go (default: the --model folder).")
+def command(model_path, data_dir, split, fit_steps, depth_only, limit, batch_size, out_dir):
+    """Reconstruction quality of the prior (paper Tab. 1): encoder pass and latent fit.
+
+    Metrics: PSNR and SSIM on tone-mapped LDR (LPIPS too when its weights are available
+    locally), PSNR on HDR, AbsRel on depth. Prints a Markdown table and writes it with a JSON
+    file holding per-image values.
+    """
+    from roomlight.data import PanoramaDataset, split_files
+    from roomlight.data.splits import find_panoramas, has_split_folders
+    from roomlight.eval.prior import evaluate_prior, report_markdown, write_report
+    from roomlight.fit import FitConfig
+    from roomlight.train.checkpoint import load_run_model, resolve_run_model
+
+    model = load_run_model(model_path)
+    if split == "auto":
+        files = split_files(data_dir)["test"] if has_split_folders(data_dir) else []
+        files = files or find_panoramas(data_dir)
+    elif split == "all":
+        files = find_panoramas(data_dir)
+    else:
+        files = split_files(data_dir)[split]
+    files = files[:limit] if limit else files
+    units = model.metadata.get("depth_units", "metres")
+    ds = PanoramaDataset(files, model.config.resolution, root=data_dir, calibrate=True, depth_units=units)
+    fit = FitConfig(steps=fit_steps) if fit_steps > 0 else None
+    report = evaluate_prior(model, ds, fit, batch_size=batch_size, depth_only_fit=depth_only,
+                            note=lambda m: click.echo(m, err=True))
+    report.update({"model": str(resolve_run_model(model_path)), "data": str(data_dir), "split": split})
+    out = Path(out_dir) if out_dir else Path(model_path)
+    if out.is_file():
+        out = out.parent
+    md, js = write_report(report, out)
+    click.echo(report_markdown(report))
+    click.echo(f"-> {md}, {js}")

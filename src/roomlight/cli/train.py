@@ -1,0 +1,84 @@
+"""``roomlight train``: train the prior on a folder of panoramas (resumable; torchrun for DDP)."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from roomlight.cli.common import fail
+
+
+def parse_overrides(items) -> dict:
+    """``FIELD=VALUE`` strings -> dict; values are JSON when they parse (numbers, true, lists), else strings.
+
+    ``loss.NAME=VALUE`` sets one entry of the loss configuration.
+    """
+    out: dict = {}
+    for item in items:
+        key, sep, raw = item.partition("=")
+        if not sep or not key:
+            fail(f"--set {item!r}: expected FIELD=VALUE, e.g. --set lr=1e-4 or --set loss.peak=0")
+        try:
+            value = json.loads(raw)
+        except json.JSONDecodeError:
+            value = raw
+        if key.startswith("loss."):
+            out.setdefault("loss", {})[key[5:]] = value
+        else:
+            out[key] = value
+    return out
+
+
+@click.command("train")
+@click.option("--data", "data_dir", required=True, type=click.Path(exists=True, file_okay=False),
+              help="Folder of panorama EXRs (R,G,B,Z or the authors' R,G,B,A), optionally with train/ val/ test/.")
+@click.option("--out", "run_dir", required=True, type=click.Path(file_okay=False),
+              help="Run folder; if it holds checkpoints, training continues from the newest.")
+@click.option("--config", "preset", default="default", show_default=True,
+              type=click.Choice(["default", "small", "tiny"]), help="Training + model preset.")
+@click.option("--batch-size", type=int, default=None, help="Global batch size (over all processes).")
+@click.option("--epochs", type=int, default=None)
+@click.option("--max-steps", type=int, default=None, help="Train exactly this many steps instead of --epochs.")
+@click.option("--lr", type=float, default=None, help="Peak learning rate.")
+@click.option("--seed", type=int, default=None)
+@click.option("--workers", "num_workers", type=int, default=None, help="Data-loader processes.")
+@click.option("--no-cache", is_flag=True, help="Decode EXRs every epoch instead of using the packed cache.")
+@click.option("--device", type=click.Choice(["cpu", "cuda"]), default=None, help="Default: cuda when available.")
+@click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
+              help="Override any TrainConfig field (docs/training.md), e.g. --set aug_tilt_deg=0 --set loss.peak=0.")
+@click.option("--print-config", is_flag=True, help="Print the resolved configuration as JSON and exit.")
+def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, num_workers, no_cache, device,
+            sets, print_config):
+    """Train the illumination prior on panoramas in --data, writing the run to --out.
+
+    Interrupting (Ctrl-C) saves a checkpoint; running the same command again continues exactly
+    where it stopped. Resuming with settings that change the optimisation is refused and the
+    differing fields are named. Several GPUs:
+
+    \b
+      torchrun --nproc-per-node=4 -m roomlight.cli.main train --data D --out RUN
+    """
+    from roomlight.train import Trainer, get_train_preset
+
+    overrides = {k: v for k, v in dict(batch_size=batch_size, epochs=epochs, max_steps=max_steps, lr=lr, seed=seed,
+                                       num_workers=num_workers).items() if v is not None}
+    if no_cache:
+        overrides["cache"] = False
+    overrides.update(parse_overrides(sets))
+    cfg = get_train_preset(preset).replace(**overrides)
+    if print_config:
+        click.echo(json.dumps(cfg.to_dict(), indent=2))
+        return
+    trainer = Trainer(cfg, data_dir, run_dir, device=device)
+    try:
+        summary = trainer.fit()
+    except KeyboardInterrupt:
+        raise SystemExit(130) from None
+    finally:
+        trainer.close()
+    if trainer.dist.is_main:
+        best = summary["best"]
+        click.echo(f"trained to step {summary['step']}/{summary['total_steps']}; "
+                   f"best validation loss {best if best is None else round(best, 5)}; "
+                   f"model: {run_dir}/best (use --model {run_dir})")

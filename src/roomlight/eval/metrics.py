@@ -1,0 +1,117 @@
+"""Panorama reconstruction metrics of the prior evaluation (paper Tab. 1).
+
+- LDR: radiance is tone-mapped with :func:`to_ldr` (exposure so that the *target's* log-average
+  luminance is 0.18, clip to [0, 1], gamma 2.2; the prediction uses the target's exposure), then
+  :func:`psnr` (data range 1) and :func:`ssim`.
+- HDR: :func:`psnr_hdr` on linear radiance, with the target's maximum as the peak signal.
+- Depth: :func:`abs_rel`, mean |D_pred - D| / D.
+
+All functions take batches and return one value per image, (B,) float64, so callers can average
+over a dataset or report per-image numbers. Pixels are weighted equally (no solid-angle weights),
+as in the paper's protocol.
+"""
+
+from __future__ import annotations
+
+
+import torch
+import torch.nn.functional as F
+
+from roomlight.errors import ShapeError
+
+__all__ = ["LDR_KEY", "log_average_luminance", "to_ldr", "psnr", "psnr_hdr", "ssim", "abs_rel",
+           "gaussian_window"]
+
+#: Log-average luminance the LDR mapping exposes to ("middle grey").
+LDR_KEY = 0.18
+_LUMA = (0.2126, 0.7152, 0.0722)
+
+
+def _check(pred: torch.Tensor, target: torch.Tensor, what: str) -> None:
+    if pred.shape != target.shape or pred.dim() != 4:
+        raise ShapeError(f"{what}: expected two (B, C, H, W) tensors of the same shape, got "
+                         f"{tuple(pred.shape)} and {tuple(target.shape)}")
+
+
+def log_average_luminance(radiance: torch.Tensor) -> torch.Tensor:
+    """(B, 3, H, W) linear RGB -> (B,) exp(mean log(Y + 1e-6)) with Rec.709 luminance Y."""
+    w = torch.tensor(_LUMA, dtype=radiance.dtype, device=radiance.device).view(1, 3, 1, 1)
+    y = (radiance.clamp_min(0.0) * w).sum(1)
+    return torch.exp(torch.log(y + 1e-6).flatten(1).mean(1))
+
+
+def to_ldr(radiance: torch.Tensor, reference: torch.Tensor | None = None, key: float = LDR_KEY,
+           gamma: float = 2.2) -> torch.Tensor:
+    """Tone-map (B, 3, H, W) linear radiance to [0, 1]: ``clip(x * s, 0, 1) ** (1 / gamma)``.
+
+    ``s = key / log_average_luminance(reference)`` per image; ``reference`` defaults to
+    ``radiance`` itself. Pass the target as reference when mapping a prediction, so that both
+    share one exposure and an exposure error shows in the metrics.
+    """
+    ref = radiance if reference is None else reference
+    s = key / log_average_luminance(ref.double())
+    x = radiance.double() * s.view(-1, 1, 1, 1).to(radiance.device)
+    return x.clamp(0.0, 1.0).pow(1.0 / gamma).to(radiance.dtype)
+
+
+def psnr(pred: torch.Tensor, target: torch.Tensor, data_range: float = 1.0) -> torch.Tensor:
+    """(B,) 10 log10(data_range^2 / MSE) per image (inf for identical images)."""
+    _check(pred, target, "psnr")
+    mse = (pred.double() - target.double()).pow(2).flatten(1).mean(1)
+    return 10.0 * torch.log10(data_range**2 / mse)
+
+
+def psnr_hdr(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    """(B,) PSNR of linear radiance with the target's maximum as the peak: 10 log10(max(T)^2 / MSE)."""
+    _check(pred, target, "psnr_hdr")
+    peak = target.double().flatten(1).amax(1)
+    mse = (pred.double() - target.double()).pow(2).flatten(1).mean(1)
+    return 10.0 * torch.log10(peak**2 / mse)
+
+
+def gaussian_window(size: int = 11, sigma: float = 1.5, dtype=torch.float64) -> torch.Tensor:
+    """(size,) normalised 1-D Gaussian; the 2-D SSIM window is its outer product."""
+    x = torch.arange(size, dtype=dtype) - (size - 1) / 2.0
+    g = torch.exp(-(x**2) / (2.0 * sigma**2))
+    return g / g.sum()
+
+
+def ssim(pred: torch.Tensor, target: torch.Tensor, data_range: float = 1.0, window: int = 11,
+         sigma: float = 1.5, k1: float = 0.01, k2: float = 0.03) -> torch.Tensor:
+    """(B,) structural similarity (Wang et al. 2004) per image, averaged over channels.
+
+    Local statistics use an 11 x 11 Gaussian window (sigma 1.5), evaluated only where the window
+    fits inside the image ("valid"), with population (biased) variances:
+
+        SSIM = (2 mu_x mu_y + C1)(2 s_xy + C2) / ((mu_x^2 + mu_y^2 + C1)(s_x^2 + s_y^2 + C2)),
+        C1 = (k1 L)^2, C2 = (k2 L)^2, L = data_range.
+
+    Computed in float64 with separable convolutions.
+    """
+    _check(pred, target, "ssim")
+    b, c, h, w = pred.shape
+    if h < window or w < window:
+        raise ShapeError(f"ssim: images of {h}x{w} are smaller than the {window}x{window} window")
+    g = gaussian_window(window, sigma).to(pred.device)
+    gx = g.view(1, 1, 1, window).repeat(c, 1, 1, 1)
+    gy = g.view(1, 1, window, 1).repeat(c, 1, 1, 1)
+
+    def blur(t):
+        return F.conv2d(F.conv2d(t, gx, groups=c), gy, groups=c)
+
+    x, y = pred.double(), target.double()
+    mx, my = blur(x), blur(y)
+    sxx = blur(x * x) - mx * mx
+    syy = blur(y * y) - my * my
+    sxy = blur(x * y) - mx * my
+    c1, c2 = (k1 * data_range) ** 2, (k2 * data_range) ** 2
+    s = ((2 * mx * my + c1) * (2 * sxy + c2)) / ((mx * mx + my * my + c1) * (sxx + syy + c2))
+    return s.flatten(1).mean(1)
+
+
+def abs_rel(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    """(B,) mean relative depth error |D_pred - D| / D per image (target depth > 0)."""
+    _check(pred, target, "abs_rel")
+    t = target.double()
+    return ((pred.double() - t).abs() / t).flatten(1).mean(1)
+

@@ -1,0 +1,166 @@
+"""Evaluating the prior as a model of panoramas (paper Tab. 1; issue 4, part 6).
+
+For every panorama of an evaluation set, two reconstructions are scored:
+
+- **encoder**: a single pass, z = posterior mean, decoded;
+- **latent fit**: z optimised against the panorama with the decoder frozen
+  (:func:`roomlight.fit.fit_latent`, the paper's 1500-step protocol by default).
+
+Metrics (:mod:`roomlight.eval.metrics`): PSNR, SSIM (and LPIPS when available locally) on
+tone-mapped LDR, PSNR on linear HDR, AbsRel on depth. The report is a dict (JSON) with means per
+row and per-image values, and renders as a Markdown table.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import torch
+
+from roomlight.data.dataset import collate_panoramas
+from roomlight.eval.lpips import load_lpips
+from roomlight.eval.metrics import abs_rel, psnr, psnr_hdr, ssim, to_ldr
+from roomlight.fit.latent import FitConfig, fit_latent
+
+__all__ = ["METRICS", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
+
+#: Metric name -> (column title, higher is better).
+METRICS = {
+    "psnr_ldr": ("PSNR LDR ↑", True),
+    "ssim_ldr": ("SSIM LDR ↑", True),
+    "lpips_ldr": ("LPIPS LDR ↓", False),
+    "psnr_hdr": ("PSNR HDR ↑", True),
+    "abs_rel": ("AbsRel depth ↓", False),
+}
+
+
+def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) -> dict[str, torch.Tensor]:
+    """Per-image metrics of predictions against targets.
+
+    Args:
+        pred_radiance, radiance: (B, 3, H, W) linear radiance (same exposure scale).
+        pred_depth, depth: (B, 1, H, W) radial depth, target > 0.
+        lpips_fn: optional callable from :func:`roomlight.eval.lpips.load_lpips`.
+    Returns:
+        name -> (B,) float64 tensor, names as in :data:`METRICS` (``lpips_ldr`` only with lpips_fn).
+    """
+    ldr_t = to_ldr(radiance.float())
+    ldr_p = to_ldr(pred_radiance.float(), reference=radiance.float())
+    out = {"psnr_ldr": psnr(ldr_p, ldr_t).cpu(), "ssim_ldr": ssim(ldr_p, ldr_t).cpu(),
+           "psnr_hdr": psnr_hdr(pred_radiance, radiance).cpu(), "abs_rel": abs_rel(pred_depth, depth).cpu()}
+    if lpips_fn is not None:
+        out["lpips_ldr"] = lpips_fn(ldr_p, ldr_t)
+    return out
+
+
+def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), batch_size: int = 8,
+                   depth_only_fit: bool = False, progress: bool = True, note=print) -> dict:
+    """Score encoder reconstructions and latent fits over ``dataset``.
+
+    Args:
+        model: a :class:`~roomlight.model.PanoVAE` (eval mode is used).
+        dataset: a :class:`~roomlight.data.PanoramaDataset` at the model's resolution, with the
+            model's exposure calibration and depth units.
+        fit_config: latent-fit settings; None skips the latent-fit row.
+        batch_size: panoramas processed together (latents are fitted independently).
+        depth_only_fit: add a row "latent fit (depth only)" (the supplementary's AbsRel check).
+        note: receives messages (skipped files, LPIPS availability).
+    Returns:
+        ``{"count", "rows": {row: {metric: mean}}, "per_image": [...], "skipped": [...],
+        "lpips": None or reason, "fit": FitConfig dict}``.
+    """
+    from tqdm import tqdm
+
+    device = next(model.parameters()).device
+    model.eval()
+    lpips_fn, lpips_reason = load_lpips(device)
+    if lpips_reason:
+        note(lpips_reason)
+    rows = {"encoder": None}
+    if fit_config is not None:
+        rows["latent fit"] = fit_config
+        if depth_only_fit:
+            rows["latent fit (depth only)"] = FitConfig(**{**fit_config.to_dict(), "target": "depth"})
+    per_image, skipped = [], []
+    values: dict[str, dict[str, list]] = {r: {} for r in rows}
+    bar = tqdm(total=len(dataset), desc="eval-prior", unit="pano", disable=not progress)
+    for start in range(0, len(dataset), batch_size):
+        batch = collate_panoramas([dataset[i] for i in range(start, min(start + batch_size, len(dataset)))])
+        skipped += [{"name": n, "reason": r} for n, r in batch["skipped"]]
+        for n, r in batch["skipped"]:
+            note(f"skipping {n}: {r}")
+        if batch["radiance"] is None:
+            bar.update(len(batch["skipped"]))
+            continue
+        rad, dep = batch["radiance"].to(device), batch["depth"].to(device)
+        records = [{"name": n} for n in batch["names"]]
+        for row, cfg in rows.items():
+            if cfg is None:
+                with torch.no_grad():
+                    pr, pd = model.decode(model.encode(rad, dep).mean)
+            else:
+                res = fit_latent(model, rad if cfg.target != "depth" else None,
+                                 dep if cfg.target != "radiance" else None, cfg)
+                pr, pd = res.radiance, res.depth
+            m = panorama_metrics(pr, pd, rad, dep, lpips_fn)
+            for k, v in m.items():
+                values[row].setdefault(k, []).extend(v.tolist())
+                for rec, val in zip(records, v.tolist()):
+                    rec.setdefault(row, {})[k] = val
+        per_image += records
+        bar.update(len(batch["names"]) + len(batch["skipped"]))
+    bar.close()
+    means = {row: {k: _mean(v) for k, v in vals.items()} for row, vals in values.items()}
+    return {"count": len(per_image), "rows": means, "per_image": per_image, "skipped": skipped,
+            "lpips": lpips_reason, "fit": fit_config.to_dict() if fit_config is not None else None}
+
+
+def _mean(v: list) -> float:
+    finite = [x for x in v if math.isfinite(x)]
+    return sum(finite) / len(finite) if finite else math.nan
+
+
+def _finite_or_none(obj):
+    """Replace NaN/inf by None recursively: strict JSON has no such numbers."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite_or_none(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite_or_none(v) for v in obj]
+    return obj
+
+
+def report_markdown(report: dict, title: str = "Prior evaluation") -> str:
+    """The report's means as a Markdown table (rows: encoder / latent fit; columns: metrics)."""
+    cols = [k for k in METRICS if any(k in r for r in report["rows"].values())]
+    lines = [f"## {title}", "", f"{report['count']} panoramas"
+             + (f", {len(report['skipped'])} skipped" if report["skipped"] else "") + ".", ""]
+    lines.append("| | " + " | ".join(METRICS[k][0] for k in cols) + " |")
+    lines.append("|---|" + "---:|" * len(cols))
+    for row, vals in report["rows"].items():
+        cells = [f"{vals[k]:.4f}" if k in ("ssim_ldr", "lpips_ldr", "abs_rel") else f"{vals[k]:.2f}"
+                 for k in cols if k in vals]
+        lines.append(f"| {row} | " + " | ".join(cells) + " |")
+    lines.append("")
+    if report.get("lpips"):
+        lines.append(f"{report['lpips']}.")
+    if report.get("fit"):
+        f = report["fit"]
+        lines.append(f"Latent fit: Adam, {f['steps']} steps, lr {f['lr']} → {f['lr_final']} (exponential), "
+                     "squared error of the normalised channels.")
+    lines.append("LDR: exposure so that the target's log-average luminance is 0.18, clip, gamma 2.2. "
+                 "HDR PSNR: peak = the target's maximum. AbsRel: mean |D̂ − D| / D.")
+    return "\n".join(lines) + "\n"
+
+
+def write_report(report: dict, out_dir: str | Path, stem: str = "eval_prior") -> tuple[Path, Path]:
+    """Write ``{stem}.md`` and ``{stem}.json`` into ``out_dir``; returns both paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    md, js = out / f"{stem}.md", out / f"{stem}.json"
+    md.write_text(report_markdown(report))
+    js.write_text(json.dumps(_finite_or_none(report), indent=2) + "\n")
+    return md, js

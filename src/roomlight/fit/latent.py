@@ -1,0 +1,163 @@
+"""Fitting the prior's latent to a panorama (supp. "Fitting details", VENI's protocol).
+
+The decoder is frozen; z (init 0) is optimised with Adam to minimise the squared error between
+the decoded and the target panorama in the network's normalised space (z-scored log1p RGB and
+log depth), with the learning rate decayed exponentially from 0.1 to 0.01 over 1500 steps.
+Targets can be radiance + depth (the paper's protocol: depth is one channel of four, so it gets a
+quarter of the objective), radiance only (panoramas without depth) or depth only.
+
+Each panorama of a batch has its own latent; the objective is the sum over the batch of each
+panorama's mean squared error, so a panorama's fit does not depend on what else is in the batch.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import torch
+
+from roomlight.errors import RoomlightError, ShapeError
+
+__all__ = ["FitConfig", "FitResult", "fit_latent", "TARGETS"]
+
+#: Which normalised channels enter the objective.
+TARGETS = {"both": (0, 1, 2, 3), "radiance": (0, 1, 2), "depth": (3,)}
+
+
+@dataclass(frozen=True)
+class FitConfig:
+    """Settings of :func:`fit_latent` (defaults: the paper's protocol)."""
+
+    #: Adam iterations.
+    steps: int = 1500
+    #: Initial learning rate.
+    lr: float = 0.1
+    #: Learning rate after ``steps`` iterations (exponential decay in between).
+    lr_final: float = 0.01
+    #: Adam (beta1, beta2); torch's defaults, as the protocol names plain Adam.
+    betas: tuple[float, float] = (0.9, 0.999)
+    #: Channels fitted: ``both`` (radiance + depth), ``radiance`` or ``depth``.
+    target: str = "both"
+    #: Start from the encoder's posterior mean instead of z = 0 (needs radiance and depth).
+    init_from_encoder: bool = False
+    #: Record the loss every this many steps in :attr:`FitResult.history`.
+    history_every: int = 10
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
+        if self.target not in TARGETS:
+            raise RoomlightError(f"FitConfig.target = {self.target!r}: use one of {sorted(TARGETS)}")
+        if self.steps < 0 or self.lr <= 0 or self.lr_final <= 0:
+            raise RoomlightError("FitConfig: steps must be >= 0 and learning rates > 0")
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["betas"] = list(self.betas)
+        return d
+
+
+@dataclass
+class FitResult:
+    """Outcome of :func:`fit_latent`.
+
+    Attributes:
+        z: (B, latent_dim) the best latents found (lowest per-panorama objective).
+        loss: (B,) their objective values (mean squared error over the fitted channels).
+        radiance: (B, 3, H, W) decoded linear radiance at ``z``.
+        depth: (B, 1, H, W) decoded depth at ``z`` (units of the model's data, e.g. metres).
+        history: list of (step, mean loss over the batch).
+    """
+
+    z: torch.Tensor
+    loss: torch.Tensor
+    radiance: torch.Tensor
+    depth: torch.Tensor
+    history: list = field(default_factory=list)
+
+
+def _check_inputs(model, radiance, depth, target):
+    h, w = model.config.resolution
+    if radiance is not None and (radiance.dim() != 4 or radiance.shape[1:] != (3, h, w)):
+        raise ShapeError(f"fit_latent: radiance must be (B, 3, {h}, {w}), got {tuple(radiance.shape)} "
+                         f"(resample to the model's resolution first)")
+    if depth is not None and (depth.dim() != 4 or depth.shape[1:] != (1, h, w)):
+        raise ShapeError(f"fit_latent: depth must be (B, 1, {h}, {w}), got {tuple(depth.shape)}")
+    if target in ("both", "radiance") and radiance is None:
+        raise RoomlightError(f"fit_latent: target {target!r} needs radiance")
+    if target in ("both", "depth") and depth is None:
+        raise RoomlightError(f"fit_latent: target {target!r} needs depth (use target='radiance' for "
+                             "panoramas without depth)")
+
+
+def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
+               config: FitConfig = FitConfig(), z0: torch.Tensor | None = None, callback=None) -> FitResult:
+    """Optimise one latent per panorama so that the decoder reproduces it.
+
+    Args:
+        model: a :class:`~roomlight.model.PanoVAE` with normalisation statistics (left in eval
+            mode; its weights get no gradient).
+        radiance: (B, 3, H, W) linear radiance at the model's resolution, exposure calibrated like
+            its training data; None for ``target='depth'``.
+        depth: (B, 1, H, W) radial depth in the model's units; None for ``target='radiance'``.
+        config: optimisation settings.
+        z0: (B, latent_dim) initial latents (default zeros, or the encoder's mean with
+            ``config.init_from_encoder``).
+        callback: called as ``callback(step, mean_loss)`` after every step (e.g. a progress bar).
+    Returns:
+        :class:`FitResult` with the best iterate per panorama.
+    """
+    _check_inputs(model, radiance, depth, config.target)
+    norm = model.normalization
+    if norm is None:
+        raise RoomlightError("fit_latent: the model has no normalisation statistics")
+    ref = radiance if radiance is not None else depth
+    b, device = ref.shape[0], ref.device
+    h, w = model.config.resolution
+    # Missing channels get placeholders (excluded from the objective) so that normalize() applies.
+    rad = radiance if radiance is not None else torch.ones(b, 3, h, w, device=device)
+    dep = depth if depth is not None else torch.ones(b, 1, h, w, device=device)
+    channels = list(TARGETS[config.target])
+    with torch.no_grad():
+        x = norm.normalize(rad.float(), dep.float())[:, channels]
+    was_training = model.training
+    model.eval()
+    for p in model.parameters():
+        p.requires_grad_(False)
+    try:
+        if z0 is None and config.init_from_encoder:
+            if radiance is None or depth is None:
+                raise RoomlightError("fit_latent: init_from_encoder needs both radiance and depth")
+            with torch.no_grad():
+                z0 = model.encode(rad.float(), dep.float()).mean
+        z = (z0.detach().clone() if z0 is not None else torch.zeros(b, model.config.latent_dim, device=device))
+        z = z.float().requires_grad_(True)
+        opt = torch.optim.Adam([z], lr=config.lr, betas=config.betas)
+        gamma = (config.lr_final / config.lr) ** (1.0 / max(config.steps, 1))
+        sched = torch.optim.lr_scheduler.ExponentialLR(opt, gamma)
+        best_z, best_loss = z.detach().clone(), torch.full((b,), math.inf, device=device)
+        history = []
+        for step in range(config.steps + 1):
+            x_hat = model.decode_normalized(z)[:, channels]
+            per = (x_hat - x).pow(2).flatten(1).mean(1)  # (B,) this iterate's objective
+            with torch.no_grad():
+                better = per < best_loss
+                best_loss = torch.where(better, per.detach(), best_loss)
+                best_z[better] = z.detach()[better]
+            if step % config.history_every == 0 or step == config.steps:
+                history.append((step, float(per.detach().mean())))
+            if step == config.steps:
+                break  # the last evaluation only scores the final iterate
+            opt.zero_grad(set_to_none=True)
+            per.sum().backward()
+            opt.step()
+            sched.step()
+            if callback is not None:
+                callback(step + 1, float(per.detach().mean()))
+        with torch.no_grad():
+            out_rad, out_dep = model.decode(best_z)
+    finally:
+        for p in model.parameters():
+            p.requires_grad_(True)
+        model.train(was_training)
+    return FitResult(best_z, best_loss, out_rad, out_dep, history)

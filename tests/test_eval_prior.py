@@ -1,0 +1,146 @@
+"""Tests of roomlight.eval: metrics against hand values and a slow SSIM reference, the prior
+evaluation report and the eval-prior command."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import click
+import pytest
+import torch
+from click.testing import CliRunner
+
+from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
+from roomlight.eval import abs_rel, evaluate_prior, load_lpips, psnr, psnr_hdr, report_markdown, ssim, to_ldr
+from roomlight.eval.metrics import gaussian_window
+from roomlight.fit import FitConfig
+from roomlight.model import Normalization, PanoVAE, get_preset
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(old)
+
+
+def ssim_reference(x, y, data_range=1.0, size=11, sigma=1.5):
+    """Slow, obvious SSIM of two (H, W) images: explicit weighted sums over every valid window."""
+    half = size // 2
+    g = [math.exp(-((i - half) ** 2) / (2 * sigma**2)) for i in range(size)]
+    s = sum(g)
+    wts = [[g[i] * g[j] / (s * s) for j in range(size)] for i in range(size)]
+    c1, c2 = (0.01 * data_range) ** 2, (0.03 * data_range) ** 2
+    h, w = len(x), len(x[0])
+    total, count = 0.0, 0
+    for r in range(h - size + 1):
+        for c in range(w - size + 1):
+            mx = my = 0.0
+            for i in range(size):
+                for j in range(size):
+                    mx += wts[i][j] * x[r + i][c + j]
+                    my += wts[i][j] * y[r + i][c + j]
+            vx = vy = cxy = 0.0
+            for i in range(size):
+                for j in range(size):
+                    dx, dy = x[r + i][c + j] - mx, y[r + i][c + j] - my
+                    vx += wts[i][j] * dx * dx
+                    vy += wts[i][j] * dy * dy
+                    cxy += wts[i][j] * dx * dy
+            total += ((2 * mx * my + c1) * (2 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2))
+            count += 1
+    return total / count
+
+
+def test_ssim_matches_a_slow_reference():
+    g = torch.Generator().manual_seed(0)
+    a = torch.rand(2, 3, 14, 16, generator=g, dtype=torch.float64)
+    b = (a + 0.15 * torch.randn(2, 3, 14, 16, generator=g, dtype=torch.float64)).clamp(0, 1)
+    got = ssim(a, b)
+    for k in range(2):
+        want = sum(ssim_reference(a[k, c].tolist(), b[k, c].tolist()) for c in range(3)) / 3
+        assert float(got[k]) == pytest.approx(want, abs=1e-10)
+    assert torch.allclose(ssim(a, a), torch.ones(2, dtype=torch.float64))
+    assert float(ssim(a, 1 - a)[0]) < 0.1
+    assert float(gaussian_window().sum()) == pytest.approx(1.0)
+
+
+def test_psnr_hdr_psnr_and_absrel_hand_values():
+    t = torch.full((1, 3, 4, 8), 0.5)
+    assert float(psnr(t + 0.1, t)) == pytest.approx(20.0, abs=1e-5)  # MSE 0.01 -> 20 dB
+    assert float(psnr(t, t)) == math.inf
+    hdr = torch.ones(1, 3, 4, 8)
+    hdr[0, :, 0, 0] = 100.0
+    assert float(psnr_hdr(hdr + 1.0, hdr)) == pytest.approx(40.0, abs=1e-9)  # peak 100, MSE 1
+    d = torch.full((2, 1, 4, 8), 2.0)
+    p = d.clone()
+    p[0] *= 1.1
+    p[1, 0, 0, :4] = 3.0  # 4 of 32 pixels off by 50 %
+    assert abs_rel(p, d).tolist() == pytest.approx([0.1, 4 * 0.5 / 32])
+
+
+def test_ldr_mapping_uses_the_targets_exposure():
+    flat = torch.full((1, 3, 4, 8), 7.0)  # luminance 7 everywhere
+    assert torch.allclose(to_ldr(flat), torch.full_like(flat, 0.18 ** (1 / 2.2)), atol=1e-5)
+    # Against a reference, an exposure error stays visible.
+    assert torch.allclose(to_ldr(2 * flat, reference=flat), torch.full_like(flat, 0.36 ** (1 / 2.2)), atol=1e-5)
+
+
+@pytest.fixture(scope="module")
+def setup(tmp_path_factory):
+    root = tmp_path_factory.mktemp("evaldata")
+    write_toy_dataset(root, 3, 32)
+    (root / "broken.exr").write_bytes(b"nope")
+    ds = PanoramaDataset(find_panoramas(root), (16, 32), root=root)
+    good = [ds[i] for i in range(len(ds)) if "error" not in ds[i]]
+    norm = Normalization.from_data([(it["radiance"], it["depth"]) for it in good])
+    torch.manual_seed(0)
+    return root, ds, PanoVAE(get_preset("tiny"), norm).eval()
+
+
+def test_evaluate_prior_report(setup):
+    _, ds, model = setup
+    notes = []
+    rep = evaluate_prior(model, ds, FitConfig(steps=20), batch_size=2, depth_only_fit=True, progress=False,
+                         note=notes.append)
+    assert rep["count"] == 3 and [s["name"] for s in rep["skipped"]] == ["broken.exr"]
+    assert list(rep["rows"]) == ["encoder", "latent fit", "latent fit (depth only)"]
+    fn, reason = load_lpips()
+    for row in rep["rows"].values():
+        assert {"psnr_ldr", "ssim_ldr", "psnr_hdr", "abs_rel"} <= set(row)
+        assert ("lpips_ldr" in row) == (fn is not None)
+    if fn is None:
+        assert rep["lpips"].startswith("LPIPS not computed") and any("LPIPS" in n for n in notes)
+    assert len(rep["per_image"]) == 3 and "latent fit" in rep["per_image"][0]
+    md = report_markdown(rep)
+    assert "| encoder |" in md and "| latent fit |" in md and "PSNR LDR" in md and "AbsRel" in md
+    # The encoder row's numbers are the metrics of the decoded posterior means.
+    items = [ds[i] for i in range(len(ds)) if "error" not in ds[i]]
+    rad = torch.stack([it["radiance"] for it in items])
+    dep = torch.stack([it["depth"] for it in items])
+    with torch.no_grad():
+        pr, pd = model.decode(model.encode(rad, dep).mean)
+    assert rep["rows"]["encoder"]["abs_rel"] == pytest.approx(float(abs_rel(pd, dep).mean()), rel=1e-5)
+
+
+def test_eval_prior_cli_writes_markdown_and_json(setup, tmp_path):
+    from roomlight.cli import eval_prior
+    from roomlight.cli.common import RoomlightGroup
+
+    root, _, model = setup
+    model.save_pretrained(tmp_path / "m")
+
+    @click.group(cls=RoomlightGroup)
+    def cli():
+        pass
+
+    cli.add_command(eval_prior.command)
+    res = CliRunner().invoke(cli, ["eval-prior", "--model", str(tmp_path / "m"), "--data", str(root),
+                                   "--fit-steps", "5", "--out", str(tmp_path / "rep")])
+    assert res.exit_code == 0, res.output
+    assert "| latent fit |" in res.output
+    rep = json.loads((tmp_path / "rep" / "eval_prior.json").read_text())
+    assert rep["count"] == 3 and rep["fit"]["steps"] == 5
+    assert (tmp_path / "rep" / "eval_prior.md").read_text().startswith("## Prior evaluation")

@@ -1,0 +1,189 @@
+"""Tests of latent fitting (roomlight.fit) and the fit-pano / convert commands."""
+
+from __future__ import annotations
+
+import json
+
+import click
+import pytest
+import torch
+from click.testing import CliRunner
+
+from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
+from roomlight.errors import RoomlightError
+from roomlight.fit import FitConfig, fit_latent
+from roomlight.io import read_panorama
+from roomlight.model import Normalization, PanoVAE, get_preset
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    # Tiny tensors: one thread is fastest, and two threads on a shared 2-core machine can be 20x slower.
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(old)
+
+
+
+@pytest.fixture(scope="module")
+def toy(tmp_path_factory):
+    """Three held-out toy panoramas (tensors at 16 x 32) and their folder."""
+    root = tmp_path_factory.mktemp("toy")
+    write_toy_dataset(root, 3, 32, seed=1000)
+    ds = PanoramaDataset(find_panoramas(root), (16, 32), root=root)
+    rad = torch.stack([ds[i]["radiance"] for i in range(3)])
+    dep = torch.stack([ds[i]["depth"] for i in range(3)])
+    return root, rad, dep
+
+
+@pytest.fixture(scope="module")
+def model(toy):
+    """A tiny untrained prior whose AdaGN layers are given small random weights, so that z reaches
+    every decoder layer (a fresh AdaGN is zero-initialised and ignores z)."""
+    from roomlight.model.blocks import AdaGN
+
+    _, rad, dep = toy
+    torch.manual_seed(0)
+    m = PanoVAE(get_preset("tiny"), Normalization.from_data([(rad, dep)]))
+    with torch.no_grad():
+        for mod in m.modules():
+            if isinstance(mod, AdaGN):
+                for p in mod.parameters():
+                    p.normal_(0.0, 0.05)
+    return m.eval()
+
+
+def objective(model, rad, dep, z, channels=(0, 1, 2, 3)):
+    x = model.normalization.normalize(rad, dep)[:, list(channels)]
+    with torch.no_grad():
+        return (model.decode_normalized(z)[:, list(channels)] - x).pow(2).flatten(1).mean(1)
+
+
+def test_fit_lowers_the_error_and_returns_the_best_iterate(model, toy):
+    _, rad, dep = toy
+    z0 = torch.zeros(3, model.config.latent_dim)
+    start = objective(model, rad, dep, z0)
+    res = fit_latent(model, rad, dep, FitConfig(steps=60))
+    assert res.z.shape == (3, model.config.latent_dim)
+    assert torch.all(res.loss < start * 0.97), (start, res.loss)
+    torch.testing.assert_close(res.loss, objective(model, rad, dep, res.z), rtol=1e-5, atol=1e-7)
+    r, d = model.decode(res.z)
+    torch.testing.assert_close(res.radiance, r)
+    torch.testing.assert_close(res.depth, d)
+    assert res.history[0][0] == 0 and res.history[-1][0] == 60
+    assert res.history[-1][1] < res.history[0][1]
+    # The weights are untouched and get their requires_grad back.
+    assert all(p.requires_grad and p.grad is None for p in model.parameters())
+
+
+def test_fit_recovers_a_panorama_the_decoder_can_express(model):
+    z_true = torch.randn(2, model.config.latent_dim, generator=torch.Generator().manual_seed(5))
+    with torch.no_grad():
+        rad, dep = model.decode(z_true)
+    start = objective(model, rad, dep, torch.zeros_like(z_true))
+    res = fit_latent(model, rad, dep, FitConfig(steps=300))
+    assert torch.all(res.loss < start / 20), (start, res.loss)
+
+
+def test_each_latent_is_fitted_independently_of_the_batch(model, toy):
+    _, rad, dep = toy
+    both = fit_latent(model, rad[:2], dep[:2], FitConfig(steps=15))
+    one = fit_latent(model, rad[1:2], dep[1:2], FitConfig(steps=15))
+    torch.testing.assert_close(both.z[1:2], one.z, rtol=1e-4, atol=1e-5)
+
+
+def test_radiance_only_and_depth_only_targets(model, toy):
+    _, rad, dep = toy
+    r = fit_latent(model, rad, None, FitConfig(steps=30, target="radiance"))
+    z0 = torch.zeros(3, model.config.latent_dim)
+    assert torch.all(r.loss < objective(model, rad, dep, z0, (0, 1, 2)))
+    torch.testing.assert_close(r.loss, objective(model, rad, dep, r.z, (0, 1, 2)), rtol=1e-5, atol=1e-7)
+    d = fit_latent(model, None, dep, FitConfig(steps=30, target="depth"))
+    assert torch.all(d.loss < objective(model, rad, dep, z0, (3,)))
+    with pytest.raises(RoomlightError, match="needs depth"):
+        fit_latent(model, rad, None, FitConfig(target="both"))
+    with pytest.raises(RoomlightError, match="target"):
+        FitConfig(target="rgb")
+
+
+def test_learning_rate_decays_exponentially_to_the_final_value(model, toy, monkeypatch):
+    _, rad, dep = toy
+    seen = []
+    orig = torch.optim.Adam.step
+
+    def spy(self, *a, **k):
+        seen.append(self.param_groups[0]["lr"])
+        return orig(self, *a, **k)
+
+    monkeypatch.setattr(torch.optim.Adam, "step", spy)
+    fit_latent(model, rad[:1], dep[:1], FitConfig(steps=10, lr=0.1, lr_final=0.01))
+    assert seen[0] == pytest.approx(0.1)
+    ratios = [b / a for a, b in zip(seen, seen[1:])]
+    assert all(r == pytest.approx(0.1 ** 0.1) for r in ratios)
+    assert seen[-1] * 0.1 ** 0.1 == pytest.approx(0.01)  # the rate after the last step
+
+
+def _cli(*modules):
+    from roomlight.cli.common import RoomlightGroup
+
+    @click.group(cls=RoomlightGroup)
+    def cli():
+        pass
+
+    for m in modules:
+        cli.add_command(m.command)
+    return cli
+
+
+def test_fit_pano_cli_writes_a_better_fit(model, toy, tmp_path):
+    from roomlight.cli import fit_pano
+
+    root, rad, dep = toy
+    model.save_pretrained(tmp_path / "m")
+    pano = find_panoramas(root)[0]
+    res = CliRunner().invoke(_cli(fit_pano), ["fit-pano", "--model", str(tmp_path / "m"), str(pano), "--steps", "40",
+                                              "--out", str(tmp_path / "fit")])
+    assert res.exit_code == 0, res.output
+    rec = json.loads((tmp_path / "fit" / "latent.json").read_text())
+    z0 = torch.zeros(1, model.config.latent_dim)
+    assert rec["objective"] < float(objective(model, rad[:1], dep[:1], z0)[0])
+    assert set(rec["metrics"]) == {"psnr_ldr", "ssim_ldr", "psnr_hdr", "abs_rel"}
+    fit = read_panorama(tmp_path / "fit" / "fit.exr")
+    assert fit.radiance.shape == (16, 32, 3) and fit.depth.shape == (16, 32)
+    for name in ("target.exr", "comparison.png", "emitter/emitter.ply", "emitter/scene.xml"):
+        assert (tmp_path / "fit" / name).exists(), name
+    # Radiance-only panoramas fall back to a radiance fit.
+    from roomlight.io import write_panorama
+
+    write_panorama(tmp_path / "rgb.exr", rad[0] * 2.0)
+    res = CliRunner().invoke(_cli(fit_pano), ["fit-pano", "--model", str(tmp_path / "m"), str(tmp_path / "rgb.exr"),
+                                              "--steps", "5", "--no-emitter"])
+    assert res.exit_code == 0, res.output
+    assert "(radiance, 5 steps)" in res.output
+    res = CliRunner().invoke(_cli(fit_pano), ["fit-pano", "--model", str(tmp_path / "m"), str(tmp_path / "rgb.exr"),
+                                              "--target", "both"])
+    assert res.exit_code != 0 and "needs depth" in res.output
+
+
+def test_convert_cli_writes_a_loadable_checkpoint(tmp_path):
+    from roomlight.cli import convert
+    from roomlight.model import to_authors_state_dict
+
+    cfg = get_preset("tiny")
+    torch.manual_seed(1)
+    src = PanoVAE(cfg)
+    run = tmp_path / "authors"
+    run.mkdir()
+    torch.save({"epoch": 3, "step": 40, "state_dict": to_authors_state_dict(src.state_dict(), cfg)},
+               run / "last_epoch.pth")
+    (run / "config.yaml").write_text(
+        "model:\n  resolution: [16, 32]\n  latent_dim: 16\n  ch: 8\n  ch_mult: [1, 2]\n  num_res_blocks: 1\n"
+        "  z_channels: 4\n  norm_groups: 4\ntrain:\n  lr: 0.0002\n")
+    res = CliRunner().invoke(_cli(convert), ["convert", str(run), str(tmp_path / "ours")])
+    assert res.exit_code == 0, res.output
+    assert "third party" in res.output
+    m = PanoVAE.from_pretrained(tmp_path / "ours")
+    assert m.metadata["depth_units"] == "scale-free"
+    for k, v in src.state_dict().items():
+        assert torch.equal(m.state_dict()[k], v)
