@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from roomlight.inverse import (
-    DirectLight, FitConfig, PriorLight, build_fitter, censor, clearance, fit_scene, image_loss, make_light,
+    DirectLight, FitConfig, build_fitter, censor, clearance, fit_scene, image_loss, make_light,
     repulsion_penalty, smoothness,
 )
 from roomlight.inverse.config import fit_config
