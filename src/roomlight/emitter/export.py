@@ -32,8 +32,9 @@ _AREA_XML = """<scene version="3.0.0">
     <shape type="ply" id="emitter">
         <string name="filename" value="emitter.ply"/>
         <boolean name="face_normals" value="true"/>
-        <bsdf type="diffuse">
-            <rgb name="reflectance" value="0, 0, 0"/>
+        <!-- a black delta BSDF: the light source reflects nothing (see EMITTER_BSDF) -->
+        <bsdf type="conductor">
+            <rgb name="specular_reflectance" value="0, 0, 0"/>
         </bsdf>
         <emitter type="area">
             <texture type="bitmap" name="radiance">

@@ -46,7 +46,7 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
     radiance = radiance.float().to(device)
     depth = depth.float().to(device) if depth is not None else None
     tex = escene.texture_value(radiance)
-    verts = escene.vertex_value(depth, radiance)
+    verts = escene.vertex_value(depth)
     params = escene.params
 
     @dr.wrap(source="torch", target="drjit")

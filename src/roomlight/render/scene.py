@@ -25,9 +25,15 @@ from roomlight.errors import RoomlightError, ShapeError
 from roomlight.render.tensors import from_mitsuba_tensor, to_mitsuba_tensor
 from roomlight.render.variant import mitsuba
 
-__all__ = ["EmitterKind", "parse_emitter_kind", "EmitterScene", "EMITTER_ID"]
+__all__ = ["EmitterKind", "parse_emitter_kind", "EmitterScene", "EMITTER_ID", "EMITTER_BSDF"]
 
 EMITTER_ID = "emitter"
+
+#: The emitter is a light source only: it must not reflect (Mitsuba's default BSDF is a 50 % grey
+#: diffuse surface, which would add bounce light). A black *smooth* BSDF would still make the
+#: integrator sample a light from every emitter hit (a shadow ray through the whole mesh, for
+#: nothing); a black *delta* BSDF has no smooth component, so paths that reach the emitter end there.
+EMITTER_BSDF = {"type": "conductor", "specular_reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
 
 
 @dataclass(frozen=True)
@@ -101,12 +107,11 @@ class EmitterScene:
             topo = area_light_topology(h, w)
             props = mi.Properties()
             props["emitter"] = mi.load_dict({"type": "area", "radiance": _texture_dict(mi, gray)})
-            # The emitter is a light source only: a black BSDF keeps it from reflecting light
-            # (Mitsuba's default would be a 50 % grey diffuse surface that adds bounce light).
-            props["bsdf"] = mi.load_dict({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}})
+            props["bsdf"] = mi.load_dict(EMITTER_BSDF)
             mesh = mi.Mesh(EMITTER_ID, topo.vertex_count, topo.face_count, props,
                            has_vertex_normals=False, has_vertex_texcoords=True)
             mp = mi.traverse(mesh)
+            # the sphere proxy keeps these vertices; a 2.5D light replaces them on set_emitter
             depth0 = sphere_depth(h, w, self.kind.radius or 1.0, torch.float32)
             mp["vertex_positions"] = mi.Float(area_light_vertices(depth0).numpy().ravel())
             mp["faces"] = mi.UInt(topo.faces.numpy().astype(np.uint32).ravel())
@@ -129,14 +134,14 @@ class EmitterScene:
             raise ShapeError(f"EmitterScene: expected radiance {(*self.resolution, 3)}, got {tuple(radiance.shape)}")
         return envmap_data(radiance) if self.kind.name == "envmap" else radiance
 
-    def vertex_value(self, depth: torch.Tensor | None, like: torch.Tensor) -> torch.Tensor | None:
-        """(H, W) depth -> flat (3N,) vertex positions, or None for the env map."""
-        if self._pos_key is None:
+    def vertex_value(self, depth: torch.Tensor | None) -> torch.Tensor | None:
+        """(H, W) depth -> flat (3N,) vertex positions; None when there is nothing to write: the
+        env map has no vertices, and the sphere proxy's fixed vertices were written when the scene
+        was built (re-writing them would rebuild the ray-tracing BVH on every render)."""
+        if self._pos_key is None or self.kind.name == "sphere":
             return None
-        if self.kind.name == "sphere" or depth is None:
-            if self.kind.name == "mesh":
-                raise RoomlightError("EmitterScene: a 'mesh' emitter needs a depth map")
-            depth = sphere_depth(*self.resolution, self.kind.radius, like.dtype, like.device)
+        if depth is None:
+            raise RoomlightError("EmitterScene: a 'mesh' emitter needs a depth map")
         if tuple(depth.shape[-2:]) != self.resolution:
             raise ShapeError(f"EmitterScene: expected depth {self.resolution}, got {tuple(depth.shape)}")
         return area_light_vertices(depth.reshape(self.resolution)).reshape(-1)
@@ -147,7 +152,7 @@ class EmitterScene:
         mi = self.mi
         with torch.no_grad():
             self.params[self._tex_key] = to_mitsuba_tensor(self.texture_value(radiance.float()))
-            verts = self.vertex_value(depth.float() if depth is not None else None, radiance)
+            verts = self.vertex_value(depth.float() if depth is not None else None)
             if verts is not None:
                 self.params[self._pos_key] = mi.Float(verts.numpy())
         self.params.update()
