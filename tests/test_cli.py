@@ -119,7 +119,13 @@ def test_negative_radiance_needs_explicit_fix(tmp_path):
 
 @pytest.mark.mitsuba
 def test_demo_runs(tmp_path):
-    r = run("demo", "--out", tmp_path / "demo", "--height", "32", "--res", "48", "--spp", "8")
+    r = run("demo", "--out", tmp_path / "demo", "--height", "16", "--res", "32", "--iterations", "4",
+            "--spp", "4", "--gt-spp", "8")
     assert r.exit_code == 0, r.output
-    for name in ("comparison.png", "probes_mesh.exr", "probes_envmap.png", "summary.json", "mesh/scene.xml"):
+    for name in ("parallax/comparison.png", "parallax/probes_mesh.exr", "parallax/mesh/scene.xml",
+                 "report/index.html", "report/report.md", "summary.json", "panoramas/room.exr"):
         assert (tmp_path / "demo" / name).is_file(), name
+    import json
+
+    summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
+    assert summary["methods"][-1] == "direct-envmap" and summary["methods"][0] in ("prior", "direct-al")
