@@ -22,6 +22,7 @@ def cli():
       roomlight demo                       the built-in end-to-end example
       roomlight emitter PANO --out DIR     panorama -> emitter (PLY, EXR, Mitsuba XML)
       roomlight render DIR --out DIR       render a view of an emitter scene
+      roomlight synth --n N --out DIR       render a dataset of procedural rooms
       roomlight train --data DIR --out RUN     train the prior on panoramas
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
@@ -30,9 +31,10 @@ def cli():
 
 
 def _register():
-    from roomlight.cli import bench, convert, data, demo, emitter, eval_prior, fit, fit_pano, info, render, sample, train
+    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, fit, fit_pano, info, render, sample,
+                               synth, train)
 
-    for mod in (info, emitter, render, data, train, fit_pano, eval_prior, sample, convert, fit, bench, demo):
+    for mod in (info, emitter, render, synth, data, train, fit_pano, eval_prior, sample, convert, fit, bench, demo):
         cli.add_command(mod.command)
 
 

@@ -1,0 +1,1 @@
+"""Procedural indoor rooms: generator (rooms, furniture, lights, sky), Mitsuba scenes, panorama rendering, dataset driver."""

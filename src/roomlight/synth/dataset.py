@@ -1,0 +1,229 @@
+"""The ``roomlight synth`` driver: procedural rooms rendered into a panorama dataset.
+
+Sample ``seed`` is the room ``generate_room(seed)`` path-traced from its capture point into an
+equirectangular panorama (radiance, Mitsuba ``path`` integrator through
+:mod:`roomlight.synth.camera`) with exact radial depth (ray intersection at pixel centres). The
+radiance is exposure-calibrated (unit log-average luminance, DESIGN.md §1) and written as
+``SPLIT/room-SEED.exr`` (R, G, B half + Z float32, metres) with metadata: the calibration factor,
+seed, split, resolution, spp and a summary of the room.
+
+Splits are seed ranges: with ``n`` samples starting at ``seed0``, the last 10 % of the range are
+``test``, the 10 % before them ``val``, the rest ``train`` (at least one of each when n >= 3).
+Shards partition the seed range by ``seed mod n_shards``. Finished files are skipped, so an
+interrupted run continues where it stopped; files are written to a temporary name and renamed,
+so a kill never leaves a half-written sample.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from roomlight.errors import RoomlightError
+
+__all__ = ["SynthConfig", "render_room", "split_of", "sample_path", "generate_dataset", "write_stats",
+           "contact_sheet"]
+
+
+@dataclass(frozen=True)
+class SynthConfig:
+    """Settings of ``roomlight synth``."""
+
+    n: int = 500                  #: number of samples (seeds seed0 .. seed0 + n - 1)
+    seed0: int = 0                #: first seed
+    height: int = 128             #: panorama height (width 2x)
+    spp: int = 128                #: samples per pixel of the path tracer
+    shard: tuple[int, int] = (0, 1)  #: (i, n): this process renders seeds with seed % n == i
+    workers: int = 1              #: worker processes
+    nadir_cap: float = 0.0        #: simulate a tripod blind spot: black cap of this polar angle (deg)
+
+
+def split_of(seed: int, seed0: int, n: int) -> str:
+    """``train``, ``val`` or ``test`` for a seed of the range [seed0, seed0 + n)."""
+    k = seed - seed0
+    n_test = max(1, int(round(0.1 * n))) if n >= 3 else 0
+    n_val = max(1, int(round(0.1 * n))) if n >= 3 else 0
+    if k >= n - n_test:
+        return "test"
+    if k >= n - n_test - n_val:
+        return "val"
+    return "train"
+
+
+def sample_path(out: Path, seed: int, seed0: int, n: int) -> Path:
+    return Path(out) / split_of(seed, seed0, n) / f"room-{seed:06d}.exr"
+
+
+def _room_summary(room) -> dict:
+    lights = [lt for lt in room.lights if getattr(lt, "on", True)]
+    return {"shell": room.shell, "room_type": room.room_type, "lighting": room.lighting,
+            "ceiling_height": round(float(room.height), 4), "capture": [round(float(c), 4) for c in room.capture],
+            "yaw": round(float(room.yaw), 6), "lights_on": len(lights),
+            "light_kinds": sorted({lt.kind for lt in lights}), "windows": len(room.windows),
+            "doors": len(room.doors), "furniture": len(room.furniture), "generator": room.version}
+
+
+def render_room(seed: int, height: int = 128, spp: int = 128, nadir_cap: float = 0.0):
+    """Render one sample: (radiance (H, W, 3) calibrated torch, depth (H, W) metres, metadata)."""
+    from roomlight.io.panorama import exposure_calibrate
+    from roomlight.synth.camera import render_depth, render_radiance
+    from roomlight.synth.rooms import generate_room
+    from roomlight.synth.scene import build_scene
+
+    room = generate_room(int(seed))
+    scene = build_scene(room)
+    rad = render_radiance(scene, room.capture, height=height, spp=spp, seed=int(seed), yaw=room.yaw)
+    depth = render_depth(scene, room.capture, height=height, yaw=room.yaw)
+    if not np.isfinite(depth).all() or (depth <= 0).any():
+        raise RoomlightError(f"room {seed}: a panorama ray escaped the room (depth not finite); this is a generator bug")
+    rad = np.clip(rad, 0.0, None)
+    if nadir_cap > 0:
+        theta = (np.arange(height) + 0.5) / height * 180.0
+        rad[theta > 180.0 - nadir_cap] = 0.0
+    cal, factor = exposure_calibrate(rad)
+    meta = {"seed": int(seed), "exposure_factor": float(factor), "spp": int(spp), "resolution": [height, 2 * height],
+            "room": _room_summary(room), "nadir_cap_deg": float(nadir_cap)}
+    return torch.from_numpy(np.ascontiguousarray(cal, np.float32)), torch.from_numpy(depth.astype(np.float32)), meta
+
+
+def _render_to_file(args) -> tuple[int, str | None, float]:
+    seed, path, cfg_n, seed0, height, spp, nadir_cap, threads = args
+    from roomlight.io import write_panorama
+
+    if threads:
+        import drjit as dr
+
+        dr.set_thread_count(threads)
+    t0 = time.perf_counter()
+    try:
+        rad, depth, meta = render_room(seed, height, spp, nadir_cap)
+        meta["split"] = split_of(seed, seed0, cfg_n)
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.stem + ".partial.exr")
+        write_panorama(tmp, (rad.numpy(), depth.numpy()), half=True, metadata=meta)
+        os.replace(tmp, path)
+        return seed, None, time.perf_counter() - t0
+    except Exception as exc:  # reported per sample; the run goes on
+        return seed, f"{type(exc).__name__}: {exc}", time.perf_counter() - t0
+
+
+def generate_dataset(out, cfg: SynthConfig, progress: bool = True) -> dict:
+    """Render the (shard of the) dataset into ``out``; returns a run summary."""
+    out = Path(out)
+    i, k = cfg.shard
+    if not (0 <= i < k):
+        raise RoomlightError(f"--shard {i}/{k}: need 0 <= i < n")
+    if cfg.height < 4 or cfg.spp < 1 or cfg.n < 1:
+        raise RoomlightError("synth: --n, --spp must be >= 1 and the height >= 4")
+    if math.isqrt(cfg.spp) ** 2 != cfg.spp:
+        # the stratified (multi-jittered) sampler draws a square number of samples per pixel
+        raise RoomlightError(f"synth: --spp must be a perfect square (e.g. 64, 144, 256), got {cfg.spp}")
+    seeds = [s for s in range(cfg.seed0, cfg.seed0 + cfg.n) if s % k == i]
+    todo = [s for s in seeds if not sample_path(out, s, cfg.seed0, cfg.n).is_file()]
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "synth.json").write_text(json.dumps({"n": cfg.n, "seed0": cfg.seed0, "height": cfg.height,
+                                                 "spp": cfg.spp, "nadir_cap": cfg.nadir_cap}, indent=2))
+    threads = max(1, (os.cpu_count() or 1) // cfg.workers) if cfg.workers > 1 else 0
+    jobs = [(s, str(sample_path(out, s, cfg.seed0, cfg.n)), cfg.n, cfg.seed0, cfg.height, cfg.spp, cfg.nadir_cap,
+             threads) for s in todo]
+    failures: dict[int, str] = {}
+    seconds = []
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(seeds), initial=len(seeds) - len(todo), desc="synth", unit="pano")
+    t0 = time.perf_counter()
+    if cfg.workers > 1 and len(jobs) > 1:
+        with ProcessPoolExecutor(cfg.workers) as pool:
+            results = pool.map(_render_to_file, jobs)
+            for seed, err, sec in results:
+                _account(seed, err, sec, failures, seconds, bar)
+    else:
+        for job in jobs:
+            _account(*_render_to_file(job), failures, seconds, bar)
+    if bar:
+        bar.close()
+    wall = time.perf_counter() - t0
+    summary = {"rendered": len(jobs) - len(failures), "skipped_existing": len(seeds) - len(todo),
+               "failed": {str(s): e for s, e in failures.items()}, "wall_seconds": round(wall, 2),
+               "panoramas_per_minute": round(60.0 * (len(jobs) - len(failures)) / wall, 2) if jobs and wall > 0 else None,
+               "median_seconds_per_panorama": round(float(np.median(seconds)), 3) if seconds else None}
+    return summary
+
+
+def _account(seed, err, sec, failures, seconds, bar):
+    if err:
+        failures[seed] = err
+        if bar:
+            bar.write(f"room {seed} failed: {err}")
+    else:
+        seconds.append(sec)
+    if bar:
+        bar.update()
+
+
+def _files(out: Path) -> list[Path]:
+    return sorted(p for p in Path(out).glob("*/room-*.exr") if ".partial" not in p.name)
+
+
+def write_stats(out) -> dict:
+    """``stats.json`` over every sample in ``out``: luminance percentiles, dynamic range, depth range."""
+    from roomlight.io import read_panorama
+
+    lums, depths, dr_stops, factors, counts = [], [], [], [], {}
+    for p in _files(out):
+        pano = read_panorama(p)
+        y = 0.2126 * pano.radiance[..., 0] + 0.7152 * pano.radiance[..., 1] + 0.0722 * pano.radiance[..., 2]
+        lums.append(np.random.default_rng(0).choice(y.ravel(), size=min(4096, y.size), replace=False))
+        depths.append([float(pano.depth.min()), float(pano.depth.max())])
+        pos = y[y > 0]
+        dr_stops.append(float(np.log2(pos.max() / np.percentile(pos, 1))) if pos.size else 0.0)
+        factors.append(float(pano.metadata.get("exposure_factor", float("nan"))))
+        split = p.parent.name
+        counts[split] = counts.get(split, 0) + 1
+    if not lums:
+        raise RoomlightError(f"{out}: no samples to summarise")
+    y = np.concatenate(lums)
+    d = np.asarray(depths)
+    stats = {"samples": int(sum(counts.values())), "splits": counts,
+             "luminance_percentiles": {str(q): float(np.percentile(y, q)) for q in (1, 5, 25, 50, 75, 95, 99, 99.9)},
+             "luminance_max": float(y.max()),
+             "dynamic_range_stops": {"median": float(np.median(dr_stops)), "min": float(np.min(dr_stops)),
+                                     "max": float(np.max(dr_stops))},
+             "depth_m": {"min": float(d[:, 0].min()), "median_min": float(np.median(d[:, 0])),
+                         "median_max": float(np.median(d[:, 1])), "max": float(d[:, 1].max())},
+             "exposure_factor": {"median": float(np.nanmedian(factors)), "min": float(np.nanmin(factors)),
+                                 "max": float(np.nanmax(factors))}}
+    (Path(out) / "stats.json").write_text(json.dumps(stats, indent=2))
+    return stats
+
+
+def contact_sheet(out, count: int = 24, columns: int = 4) -> Path:
+    """``contact_sheet.png``: tone-mapped radiance of the first ``count`` samples."""
+    from roomlight.io import read_panorama, save_png
+    from roomlight.io.preview import tonemap_gamma
+
+    files = _files(out)[:count]
+    if not files:
+        raise RoomlightError(f"{out}: no samples for a contact sheet")
+    tiles = [tonemap_gamma(read_panorama(p).radiance) for p in files]
+    h, w, _ = tiles[0].shape
+    rows = math.ceil(len(tiles) / columns)
+    sheet = np.zeros((rows * (h + 2), columns * (w + 2), 3), np.uint8)
+    for k, t in enumerate(tiles):
+        r, c = divmod(k, columns)
+        if t.shape == (h, w, 3):
+            sheet[r * (h + 2):r * (h + 2) + h, c * (w + 2):c * (w + 2) + w] = t
+    path = Path(out) / "contact_sheet.png"
+    save_png(path, sheet)
+    return path

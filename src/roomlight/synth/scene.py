@@ -1,0 +1,118 @@
+"""Room description -> Mitsuba scene.
+
+Primitives are triangulated per material into one ``mi.Mesh`` each (few shapes, world-space
+texture coordinates scaled by the material's tile size). Emissive materials become Mitsuba
+``area`` emitters; every window gets a portal mesh with a
+:mod:`roomlight.synth.portal` emitter. Emitters are sampled in proportion to their
+estimated flux (``sampling_weight``), so a 100 klx sun patch does not starve a desk lamp
+of samples, nor the reverse.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from roomlight.render.variant import mitsuba
+from roomlight.synth.color import luminance
+from roomlight.synth.materials import bsdf_dict, emission_texture
+from roomlight.synth.mesh import MeshArrays, MeshBuilder
+from roomlight.synth.portal import portal_emitter, portal_power, portal_quad
+from roomlight.synth.spec import Room
+
+__all__ = ["build_scene", "room_meshes", "DEFAULT_MAX_DEPTH"]
+
+#: Path length limit (Mitsuba's ``max_depth``: 1 = emitters seen directly, 2 = direct
+#: lighting, 5 = three indirect bounces).
+DEFAULT_MAX_DEPTH = 5
+
+
+def room_meshes(room: Room) -> dict[str, MeshArrays]:
+    """Triangle meshes of the room, one per material name (emissive ones included)."""
+    builders: dict[str, MeshBuilder] = {}
+    for part in room.all_parts():
+        if part.material not in room.materials:
+            raise KeyError(f"room {room.seed}: part uses unknown material {part.material!r}")
+        if part.material not in builders:
+            m = room.materials[part.material]
+            tile = float(m.texture.get("tile", 1.0)) if m.texture else 1.0
+            builders[part.material] = MeshBuilder(tile=tile)
+        builders[part.material].add(part)
+    return {name: b.build() for name, b in builders.items()}
+
+
+def _mesh(mi, name: str, arrays: MeshArrays, bsdf, emitter=None):
+    props = mi.Properties()
+    props["bsdf"] = bsdf
+    if emitter is not None:
+        props["emitter"] = emitter
+    mesh = mi.Mesh(name, arrays.positions.shape[0], arrays.faces.shape[0], props,
+                   has_vertex_normals=True, has_vertex_texcoords=True)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(arrays.positions.ravel())
+    params["vertex_normals"] = mi.Float(arrays.normals.ravel())
+    params["vertex_texcoords"] = mi.Float(arrays.uvs.ravel())
+    params["faces"] = mi.UInt(arrays.faces.ravel())
+    params.update()
+    return mesh
+
+
+def _mean_emission(m) -> float:
+    lum = luminance(m.emission)
+    if m.emission_texture:
+        from roomlight.synth.textures import make_texture
+
+        tex = make_texture(m.emission_texture)
+        lum *= float((tex @ np.array([0.2126, 0.7152, 0.0722])).mean())
+    return lum
+
+
+def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | None = None,
+                integrator: dict | None = None):
+    """Instantiate the room as a ``mi.Scene`` with a ``path`` integrator.
+
+    Args:
+        room: the room description.
+        max_depth: Mitsuba path length limit (see :data:`DEFAULT_MAX_DEPTH`).
+        rr_depth: depth at which Russian roulette starts (default: ``max_depth``, i.e. none).
+        integrator: a full integrator dict overriding the two settings above.
+    Returns:
+        ``mi.Scene`` (no sensor: render it with :mod:`roomlight.synth.camera`).
+    """
+    mi = mitsuba()
+    meshes = room_meshes(room)
+    black = mi.load_dict({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}})
+    powers: dict[str, float] = {}
+    for name, arrays in meshes.items():
+        m = room.materials[name]
+        if m.emission is not None and max(m.emission) > 0:
+            powers[name] = math.pi * arrays.area * _mean_emission(m)
+    portals = []
+    for k, w in enumerate(room.windows):
+        sky_flux, sun_flux = portal_power(w, room.sky)
+        powers[f"portal_{k}"] = sky_flux + sun_flux
+    floor = 0.01 * max(powers.values()) if powers else 0.0
+
+    entries: dict = {"type": "scene"}
+    if integrator is None:
+        integrator = {"type": "path", "max_depth": int(max_depth),
+                      "rr_depth": int(rr_depth if rr_depth is not None else max_depth)}
+    entries["integrator"] = integrator
+    for name, arrays in meshes.items():
+        m = room.materials[name]
+        emitter = None
+        if name in powers:
+            emitter = mi.load_dict({"type": "area", "radiance": emission_texture(mi, m),
+                                    "sampling_weight": float(powers[name] + floor)})
+        bsdf = black if m.emission is not None else mi.load_dict(bsdf_dict(mi, m))
+        entries[f"mesh_{name}"] = _mesh(mi, name, arrays, bsdf, emitter)
+    for k, w in enumerate(room.windows):
+        o, a, b = portal_quad(w)
+        builder = MeshBuilder()
+        builder.quad(o, a, b, "local")
+        emitter = portal_emitter(mi, w, room.sky, powers[f"portal_{k}"] + floor)
+        portals.append(emitter)
+        entries[f"portal_{k}"] = _mesh(mi, f"portal_{k}", builder.build(), black, emitter)
+    scene = mi.load_dict(entries)
+    return scene
