@@ -4,7 +4,7 @@ Sample ``seed`` is the room ``generate_room(seed)`` path-traced from its capture
 equirectangular panorama (radiance, Mitsuba ``path`` integrator through
 :mod:`roomlight.synth.camera`) with exact radial depth (ray intersection at pixel centres). The
 radiance is exposure-calibrated (unit log-average luminance, DESIGN.md §1) and written as
-``SPLIT/room-SEED.exr`` (R, G, B half + Z float32, metres) with metadata: the calibration factor,
+``SPLIT/room-SEED.exr`` (R, G, B half — float32 when a value exceeds the half range — + Z float32, metres) with metadata: the calibration factor,
 seed, split, resolution, spp and a summary of the room.
 
 Splits are seed ranges: with ``n`` samples starting at ``seed0``, the last 10 % of the range are
@@ -109,7 +109,9 @@ def _render_to_file(args) -> tuple[int, str | None, float]:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.stem + ".partial.exr")
-        write_panorama(tmp, (rad.numpy(), depth.numpy()), half=True, metadata=meta)
+        # float16 tops out at 65504: a visible sun can exceed it even after calibration
+        half = float(rad.max()) < 65000.0
+        write_panorama(tmp, (rad.numpy(), depth.numpy()), half=half, metadata=meta)
         os.replace(tmp, path)
         return seed, None, time.perf_counter() - t0
     except Exception as exc:  # reported per sample; the run goes on
