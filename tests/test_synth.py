@@ -112,3 +112,13 @@ def test_bad_arguments_are_clean_errors(tmp_path):
         generate_dataset(tmp_path, SynthConfig(n=1, height=8, spp=10), progress=False)
     with pytest.raises(RoomlightError, match="shard"):
         generate_dataset(tmp_path, SynthConfig(n=1, height=8, spp=4, shard=(2, 2)), progress=False)
+
+
+def test_capture_point_is_at_eye_height_and_clear_of_surfaces():
+    from roomlight.synth.rooms import capture_clearance, generate_room
+
+    for seed in range(12):
+        room = generate_room(seed)
+        assert 0.9 <= room.capture[1] <= 1.8
+        assert 2.3 <= room.height <= 4.0
+        assert capture_clearance(room) >= 0.4, seed
