@@ -9,6 +9,16 @@ torch.set_num_threads(max(1, min(2, os.cpu_count() or 1)))
 
 
 @pytest.fixture
+def one_torch_thread():
+    """Run a test on one torch thread: its tensors are tiny, and two threads on a shared 2-core
+    machine can be many times slower than one."""
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(old)
+
+
+@pytest.fixture
 def rng():
     return np.random.default_rng(1234)
 

@@ -18,12 +18,7 @@ from roomlight.fit import FitConfig
 from roomlight.model import Normalization, PanoVAE, get_preset
 
 
-@pytest.fixture(autouse=True)
-def _one_thread():
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 def ssim_reference(x, y, data_range=1.0, size=11, sigma=1.5):

@@ -16,13 +16,7 @@ from roomlight.io import read_panorama
 from roomlight.model import Normalization, PanoVAE, get_preset
 
 
-@pytest.fixture(autouse=True)
-def _one_thread():
-    # Tiny tensors: one thread is fastest, and two threads on a shared 2-core machine can be 20x slower.
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 

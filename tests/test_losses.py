@@ -23,12 +23,7 @@ from roomlight.losses import (
 from roomlight.model import Normalization
 
 
-@pytest.fixture(autouse=True)
-def _one_thread():
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 SCHARR = [[-3, 0, 3], [-10, 0, 10], [-3, 0, 3]]

@@ -33,12 +33,7 @@ FOUR_STAGE = ModelConfig(resolution=(32, 64), latent_dim=8, ch=8, ch_mult=(1, 1,
                          z_channels=4, norm_groups=4)
 
 
-@pytest.fixture(autouse=True)
-def _one_thread():
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 def _randomize(model: torch.nn.Module, seed: int = 0) -> torch.nn.Module:

@@ -19,12 +19,7 @@ from roomlight.io import read_exr, read_panorama
 from roomlight.model import Normalization, PanoVAE, get_preset
 
 
-@pytest.fixture(autouse=True)
-def _one_thread():
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 @pytest.fixture(scope="module")

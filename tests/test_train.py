@@ -21,13 +21,7 @@ from roomlight.train import (TRAIN_PRESETS, Trainer, TrainConfig, TrainingError,
 from roomlight.train.checkpoint import optimizer_from_tensors, optimizer_to_tensors
 
 
-@pytest.fixture(autouse=True)
-def _one_thread():
-    # Tiny tensors: one thread is fastest, and two threads on a shared 2-core machine can be 20x slower.
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 FAST = dict(progress=False, log_every=1, val_every=0, ckpt_every=1000, image_every=0, num_workers=0)
