@@ -112,9 +112,12 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
         if model is None:
             raise click.UsageError(f"methods {', '.join(needs_prior)} need --model (a trained prior); "
                                    "or choose --methods without them")
-        from roomlight.model import PanoVAE
+        from roomlight.render.variant import torch_device
+        from roomlight.train.checkpoint import load_run_model
 
-        prior = PanoVAE.from_pretrained(model)
+        # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
+        # on the device Mitsuba renders on, so decoded maps reach the renderer without copies
+        prior = load_run_model(model, device=torch_device())
     spp = eval_spp if eval_spp is not None else (PAPER_EVAL_SPP if paper else 256)
     summary = run_benchmark(bench, out_dir, method_list, cfg, prior, eval_spp=spp, shard=parse_shard(shard),
                             progress=not quiet)

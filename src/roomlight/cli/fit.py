@@ -15,7 +15,8 @@ from roomlight.inverse.methods import METHODS
                    "direct-al / direct-sphere / direct-envmap: per-pixel maps with a smoothness prior.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
 @click.option("--model", type=click.Path(), default=None,
-              help="Trained prior (a run folder or checkpoint directory) for the prior methods.")
+              help="Trained prior for the prior methods: a model folder, a training run (uses its best/) "
+                   "or the authors' run folder.")
 @click.option("--preset", type=click.Choice(list(FIT_PRESETS)), default="paper", show_default=True,
               help="paper: the paper's settings (500 it, 64 spp); fast: a CPU-friendly setting.")
 @click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
@@ -48,9 +49,12 @@ def command(scene, method, out_dir, model, preset, quiet, **overrides):
     if method.startswith("prior"):
         if model is None:
             raise click.UsageError(f"--method {method} needs --model (a trained prior)")
-        from roomlight.model import PanoVAE
+        from roomlight.render.variant import torch_device
+        from roomlight.train.checkpoint import load_run_model
 
-        prior = PanoVAE.from_pretrained(model)
+        # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
+        # on the device Mitsuba renders on, so decoded maps reach the renderer without copies
+        prior = load_run_model(model, device=torch_device())
     result = fit_scene(spec, method, cfg, out_dir=out_dir, model=prior, progress=not quiet)
     click.echo(f"{method}: best iteration {result.best_iteration} (fixed-seed loss {result.best_loss:.4g}) "
                f"in {result.seconds:.1f} s -> {out_dir}")
