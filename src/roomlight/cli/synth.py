@@ -29,8 +29,11 @@ def _shard(text: str) -> tuple[int, int]:
 @click.option("--workers", type=int, default=1, show_default=True, help="Worker processes.")
 @click.option("--nadir-cap", type=float, default=0.0, show_default=True,
               help="Simulate a tripod blind spot: black cap of this polar angle (degrees) at the nadir.")
+@click.option("--denoise", is_flag=True,
+              help="Denoise with Intel OIDN (needs `pip install pyoidn`); light sources keep their exact values. "
+                   "16 spp + --denoise beats 256 spp without it.")
 @click.option("--no-summary", is_flag=True, help="Skip stats.json and the contact sheet.")
-def command(n, out_dir, res, spp, seed0, shard, workers, nadir_cap, no_summary):
+def command(n, out_dir, res, spp, seed0, shard, workers, nadir_cap, denoise, no_summary):
     """Render N procedural rooms into OUT as panorama EXRs (R,G,B + Z depth in metres).
 
     Each seed is a random room (box, L-shaped or alcove; furniture; doors; windows with sky and
@@ -38,13 +41,18 @@ def command(n, out_dir, res, spp, seed0, shard, workers, nadir_cap, no_summary):
     Samples go to OUT/train, OUT/val and OUT/test by seed range (80/10/10 %). Re-running the
     same command skips finished samples. Also writes OUT/stats.json and OUT/contact_sheet.png.
     """
-    from roomlight.synth.dataset import SynthConfig, contact_sheet, generate_dataset, write_stats
+    from roomlight.synth.dataset import (
+        SynthConfig,
+        contact_sheet,
+        generate_dataset,
+        write_stats,
+    )
 
     h, w = res
     if w != 2 * h:
         raise click.BadParameter(f"panoramas are H x 2H, got {h}x{w}", param_hint="--res")
     cfg = SynthConfig(n=n, seed0=seed0, height=h, spp=spp, shard=_shard(shard), workers=max(1, workers),
-                      nadir_cap=nadir_cap)
+                      nadir_cap=nadir_cap, denoise=denoise)
     summary = generate_dataset(out_dir, cfg)
     click.echo(json.dumps(summary))
     if not no_summary:

@@ -25,7 +25,7 @@ import numpy as np
 from roomlight.errors import RoomlightError
 from roomlight.render.variant import mitsuba
 
-__all__ = ["render_radiance", "render_depth", "SAMPLERS", "MAX_RAYS_PER_PASS"]
+__all__ = ["MAX_RAYS_PER_PASS", "SAMPLERS", "effective_spp", "render_aovs", "render_depth", "render_radiance"]
 
 SAMPLERS = ("multijitter", "independent", "stratified", "orthogonal", "ldsampler")
 #: Rays traced per pass (bounds memory: ~100 bytes of state per ray).
@@ -64,6 +64,22 @@ def _check(height: int, width: int, spp: int):
         raise RoomlightError(f"spp must be a positive integer, got {spp}")
 
 
+def effective_spp(spp: int, sampler: str = "multijitter") -> int:
+    """Samples per pixel the sampler really takes for a request of ``spp`` (stratified
+    samplers round up to a grid: multijitter 128 -> 132, stratified to a square)."""
+    if sampler not in SAMPLERS:
+        raise RoomlightError(f"sampler {sampler!r} is unknown; choose one of {', '.join(SAMPLERS)}")
+    if spp <= 0:
+        raise RoomlightError(f"spp must be a positive integer, got {spp}")
+    mi = mitsuba()
+    level = mi.log_level()
+    try:
+        mi.set_log_level(mi.LogLevel.Error)
+        return int(mi.load_dict({"type": sampler, "sample_count": int(spp)}).sample_count())
+    finally:
+        mi.set_log_level(level)
+
+
 def render_radiance(scene, origin, height: int = 128, width: int | None = None, spp: int = 64,
                     seed: int = 0, yaw: float = 0.0, sampler: str = "multijitter") -> np.ndarray:
     """Path-traced equirectangular radiance seen from ``origin``.
@@ -72,7 +88,7 @@ def render_radiance(scene, origin, height: int = 128, width: int | None = None, 
         scene: ``mi.Scene`` with an integrator (see :func:`roomlight.synth.scene.build_scene`).
         origin: capture point (x, y, z), world frame, metres.
         height, width: panorama size (W = 2H; width defaults to 2 * height).
-        spp: samples per pixel.
+        spp: samples per pixel (rounded up as the sampler needs: see :func:`effective_spp`).
         seed: sampler seed (any int; the same seed gives identical output).
         yaw: rotation of the panorama frame about +y (radians; see the module docstring).
         sampler: Mitsuba sampler plugin, one of :data:`SAMPLERS`.
@@ -84,8 +100,7 @@ def render_radiance(scene, origin, height: int = 128, width: int | None = None, 
     mi = mitsuba()
     width = width or 2 * height
     _check(height, width, spp)
-    if sampler not in SAMPLERS:
-        raise RoomlightError(f"sampler {sampler!r} is unknown; choose one of {', '.join(SAMPLERS)}")
+    spp = effective_spp(spp, sampler)
     integrator = scene.integrator()
     rows_per_pass = max(1, min(height, MAX_RAYS_PER_PASS // (width * spp)))
     out = np.zeros((height, width, 3), np.float64)
@@ -129,3 +144,39 @@ def render_depth(scene, origin, height: int = 128, width: int | None = None, yaw
     si = scene.ray_intersect(mi.Ray3f(_origin(mi, dr, origin), d))
     t = dr.select(si.is_valid(), si.t, dr.inf)
     return np.asarray(t, np.float32).reshape(height, width)
+
+
+def render_aovs(scene, origin, height: int = 128, width: int | None = None, spp: int = 16,
+                seed: int = 0, yaw: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """First-hit auxiliary images for denoising, averaged over ``spp`` jittered rays per pixel.
+
+    Returns:
+        ``(albedo (H, W, 3), normal (H, W, 3), emitter (H, W))`` float32: the diffuse
+        reflectance and world shading normal at the first hit, and the fraction of the pixel's
+        rays whose first hit is a light source (an area emitter or a window portal).
+    """
+    import drjit as dr
+
+    mi = mitsuba()
+    width = width or 2 * height
+    _check(height, width, spp)
+    n = height * width * spp
+    smp = mi.load_dict({"type": "independent", "sample_count": int(spp)})
+    smp.seed(dr.opaque(mi.UInt32, (int(seed) * 7919 + 104729) & 0xFFFFFFFF), n)
+    idx = dr.arange(mi.UInt32, n)
+    pix = idx // spp
+    s = smp.next_2d()
+    d = _directions(mi, dr, (pix // width, pix % width), width, height, yaw, s.x, s.y)
+    ray = mi.Ray3f(_origin(mi, dr, origin), d)
+    si = scene.ray_intersect(ray)
+    albedo = mi.Color3f(si.bsdf(ray).eval_diffuse_reflectance(si))
+    normal = dr.select(si.is_valid(), si.sh_frame.n, mi.Vector3f(0.0))
+    emitter = mi.Float(si.emitter(scene) != None)
+    dr.eval(albedo, normal, emitter)
+
+    def mean(v, c):
+        a = np.stack([np.asarray(v[k], np.float32) for k in range(c)], -1)
+        return a.reshape(height, width, spp, c).astype(np.float64).mean(2).astype(np.float32)
+
+    em = np.asarray(emitter, np.float32).reshape(height, width, spp).mean(2)
+    return mean(albedo, 3), mean(normal, 3), em.astype(np.float32)

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-__all__ = ["luminance", "kelvin_rgb", "light_rgb", "srgb_to_linear", "hsv_albedo"]
+__all__ = ["hsv_albedo", "kelvin_rgb", "light_rgb", "luminance", "srgb_to_linear"]
 
 _XYZ_TO_RGB = np.array([[3.2406, -1.5372, -0.4986],
                         [-0.9689, 1.8758, 0.0415],
@@ -72,7 +72,7 @@ def hsv_albedo(h: float, s: float, v: float) -> tuple[float, float, float]:
     paint reflects more than ~92 % or less than ~1 %).
     """
     h = (h % 1.0) * 6.0
-    i = int(math.floor(h)) % 6
+    i = math.floor(h) % 6
     f = h - math.floor(h)
     p, q, t = v * (1 - s), v * (1 - s * f), v * (1 - s * (1 - f))
     rgb = [(v, t, p), (q, v, p), (p, v, t), (p, q, v), (t, p, v), (v, p, q)][i]

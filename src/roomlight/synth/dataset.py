@@ -29,8 +29,15 @@ import torch
 
 from roomlight.errors import RoomlightError
 
-__all__ = ["SynthConfig", "render_room", "split_of", "sample_path", "generate_dataset", "write_stats",
-           "contact_sheet"]
+__all__ = [
+    "SynthConfig",
+    "contact_sheet",
+    "generate_dataset",
+    "render_room",
+    "sample_path",
+    "split_of",
+    "write_stats",
+]
 
 
 @dataclass(frozen=True)
@@ -44,13 +51,14 @@ class SynthConfig:
     shard: tuple[int, int] = (0, 1)  #: (i, n): this process renders seeds with seed % n == i
     workers: int = 1              #: worker processes
     nadir_cap: float = 0.0        #: simulate a tripod blind spot: black cap of this polar angle (deg)
+    denoise: bool = False         #: denoise with Intel OIDN (pyoidn), light sources kept unbiased
 
 
 def split_of(seed: int, seed0: int, n: int) -> str:
     """``train``, ``val`` or ``test`` for a seed of the range [seed0, seed0 + n)."""
     k = seed - seed0
-    n_test = max(1, int(round(0.1 * n))) if n >= 3 else 0
-    n_val = max(1, int(round(0.1 * n))) if n >= 3 else 0
+    n_test = max(1, round(0.1 * n)) if n >= 3 else 0
+    n_val = max(1, round(0.1 * n)) if n >= 3 else 0
     if k >= n - n_test:
         return "test"
     if k >= n - n_test - n_val:
@@ -71,8 +79,13 @@ def _room_summary(room) -> dict:
             "doors": len(room.doors), "furniture": len(room.furniture), "generator": room.version}
 
 
-def render_room(seed: int, height: int = 128, spp: int = 128, nadir_cap: float = 0.0):
-    """Render one sample: (radiance (H, W, 3) calibrated torch, depth (H, W) metres, metadata)."""
+def render_room(seed: int, height: int = 128, spp: int = 128, nadir_cap: float = 0.0, denoise: bool = False):
+    """Render one sample: (radiance (H, W, 3) calibrated torch, depth (H, W) metres, metadata).
+
+    With ``denoise`` the path-traced radiance is denoised by Intel OIDN with first-hit albedo
+    and normals; pixels of light sources keep their Monte Carlo values
+    (:mod:`roomlight.synth.denoise`).
+    """
     from roomlight.io.panorama import exposure_calibrate
     from roomlight.synth.camera import render_depth, render_radiance
     from roomlight.synth.rooms import generate_room
@@ -82,6 +95,15 @@ def render_room(seed: int, height: int = 128, spp: int = 128, nadir_cap: float =
     scene = build_scene(room)
     rad = render_radiance(scene, room.capture, height=height, spp=spp, seed=int(seed), yaw=room.yaw)
     depth = render_depth(scene, room.capture, height=height, yaw=room.yaw)
+    denoiser = None
+    if denoise:
+        from roomlight.synth.camera import render_aovs
+        from roomlight.synth.denoise import denoise_panorama, denoiser_version
+
+        albedo, normal, emitter = render_aovs(scene, room.capture, height=height, spp=min(16, spp), seed=int(seed),
+                                              yaw=room.yaw)
+        rad = denoise_panorama(rad, albedo, normal, emitter)
+        denoiser = denoiser_version() + " (hdr, albedo + normal, light sources kept)"
     if not np.isfinite(depth).all() or (depth <= 0).any():
         raise RoomlightError(f"room {seed}: a panorama ray escaped the room (depth not finite); this is a generator bug")
     rad = np.clip(rad, 0.0, None)
@@ -91,11 +113,13 @@ def render_room(seed: int, height: int = 128, spp: int = 128, nadir_cap: float =
     cal, factor = exposure_calibrate(rad)
     meta = {"seed": int(seed), "exposure_factor": float(factor), "spp": int(spp), "resolution": [height, 2 * height],
             "room": _room_summary(room), "nadir_cap_deg": float(nadir_cap)}
+    if denoiser:
+        meta["denoiser"] = denoiser
     return torch.from_numpy(np.ascontiguousarray(cal, np.float32)), torch.from_numpy(depth.astype(np.float32)), meta
 
 
 def _render_to_file(args) -> tuple[int, str | None, float]:
-    seed, path, cfg_n, seed0, height, spp, nadir_cap, threads = args
+    seed, path, cfg_n, seed0, height, spp, nadir_cap, threads, denoise = args
     from roomlight.io import write_panorama
 
     if threads:
@@ -104,7 +128,7 @@ def _render_to_file(args) -> tuple[int, str | None, float]:
         dr.set_thread_count(threads)
     t0 = time.perf_counter()
     try:
-        rad, depth, meta = render_room(seed, height, spp, nadir_cap)
+        rad, depth, meta = render_room(seed, height, spp, nadir_cap, denoise)
         meta["split"] = split_of(seed, seed0, cfg_n)
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -114,7 +138,7 @@ def _render_to_file(args) -> tuple[int, str | None, float]:
         write_panorama(tmp, (rad.numpy(), depth.numpy()), half=half, metadata=meta)
         os.replace(tmp, path)
         return seed, None, time.perf_counter() - t0
-    except Exception as exc:  # reported per sample; the run goes on
+    except Exception as exc:  # noqa: BLE001 - reported per sample; the run goes on
         return seed, f"{type(exc).__name__}: {exc}", time.perf_counter() - t0
 
 
@@ -129,14 +153,19 @@ def generate_dataset(out, cfg: SynthConfig, progress: bool = True) -> dict:
     if math.isqrt(cfg.spp) ** 2 != cfg.spp:
         # the stratified (multi-jittered) sampler draws a square number of samples per pixel
         raise RoomlightError(f"synth: --spp must be a perfect square (e.g. 64, 144, 256), got {cfg.spp}")
+    if cfg.denoise:
+        from roomlight.synth.denoise import denoiser_version
+
+        denoiser_version()  # fail before any work when pyoidn is missing
     seeds = [s for s in range(cfg.seed0, cfg.seed0 + cfg.n) if s % k == i]
     todo = [s for s in seeds if not sample_path(out, s, cfg.seed0, cfg.n).is_file()]
     out.mkdir(parents=True, exist_ok=True)
     (out / "synth.json").write_text(json.dumps({"n": cfg.n, "seed0": cfg.seed0, "height": cfg.height,
-                                                 "spp": cfg.spp, "nadir_cap": cfg.nadir_cap}, indent=2))
+                                                 "spp": cfg.spp, "nadir_cap": cfg.nadir_cap, "denoise": cfg.denoise},
+                                                indent=2))
     threads = max(1, (os.cpu_count() or 1) // cfg.workers) if cfg.workers > 1 else 0
     jobs = [(s, str(sample_path(out, s, cfg.seed0, cfg.n)), cfg.n, cfg.seed0, cfg.height, cfg.spp, cfg.nadir_cap,
-             threads) for s in todo]
+             threads, cfg.denoise) for s in todo]
     failures: dict[int, str] = {}
     seconds = []
     bar = None

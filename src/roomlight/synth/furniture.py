@@ -11,14 +11,32 @@ names (``shade_<k>``, ``screen_<k>``) whose materials :mod:`roomlight.synth.ligh
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 import numpy as np
 
 from roomlight.synth.materials import BOOK_MATERIALS
 from roomlight.synth.spec import Box, Cylinder, Quad, Sphere
 
-__all__ = ["Piece", "Fixture", "sofa", "bookshelf", "cabinet", "bed", "table", "chair", "tv_unit",
-           "desk", "plant", "rug", "painting", "floor_lamp", "table_lamp", "counter", "armchair"]
+__all__ = [
+    "Fixture",
+    "Piece",
+    "armchair",
+    "bed",
+    "bookshelf",
+    "cabinet",
+    "chair",
+    "counter",
+    "desk",
+    "floor_lamp",
+    "painting",
+    "plant",
+    "rug",
+    "sofa",
+    "table",
+    "table_lamp",
+    "tv_unit",
+]
 
 
 @dataclass
@@ -67,7 +85,7 @@ def sofa(rng, mat="fabric") -> Piece:
          _box(w / 2 - arm, seat - 0.1, 0.01, w / 2, seat + 0.2, d, mat)]
     n = int(rng.integers(2, 4))
     xs = np.linspace(-w / 2 + arm, w / 2 - arm, n + 1)
-    for a, b in zip(xs[:-1], xs[1:]):
+    for a, b in pairwise(xs):
         p.append(_box(a + 0.005, seat - 0.1, 0.22, b - 0.005, seat, d - 0.01, mat))
     p += _legs(w, d, 0.08, "black", 0.02, 0.06, 0.01)
     if rng.random() < 0.6:
@@ -93,7 +111,7 @@ def bookshelf(rng, max_h: float, mat="wood") -> Piece:
          _box(-w / 2, 0.08, 0.01, w / 2, h - t, 0.02, mat)]
     n = max(1, int((h - 0.1) / rng.uniform(0.3, 0.4)))
     ys = np.linspace(0.08, h - t, n + 1)
-    for k, (y0, y1) in enumerate(zip(ys[:-1], ys[1:])):
+    for k, (y0, y1) in enumerate(pairwise(ys)):
         if k > 0:
             p.append(_box(-w / 2 + t, y0 - t, 0.02, w / 2 - t, y0, d, mat))
         x = -w / 2 + t + 0.01
@@ -117,9 +135,9 @@ def cabinet(rng, max_h: float, tall: bool = False, mat: str | None = None) -> Pi
     d = float(rng.uniform(0.5, 0.65) if tall else rng.uniform(0.35, 0.55))
     h = float(min(rng.uniform(1.8, 2.3), max_h) if tall else rng.uniform(0.45, 1.0))
     p = [_box(-w / 2, 0.06, 0.01, w / 2, h, d, mat, "xXYzZ"), _box(-w / 2 + 0.02, 0, 0.03, w / 2 - 0.02, 0.06, d - 0.03, "black", "xXYzZ")]
-    doors = max(1, int(round(w / 0.5)))
+    doors = max(1, round(w / 0.5))
     xs = np.linspace(-w / 2, w / 2, doors + 1)
-    for a, b in zip(xs[:-1], xs[1:]):
+    for a, b in pairwise(xs):
         p.append(_box(a + 0.004, 0.07, d, b - 0.004, h - 0.01, d + 0.015, mat))
         hx = b - 0.05 if (a + b) < 0 else a + 0.04
         hy = h * 0.5 if tall else h - 0.12

@@ -20,7 +20,7 @@ from roomlight.synth.furniture import Fixture, Piece
 from roomlight.synth.shell import Shell, inside
 from roomlight.synth.spec import Box, Cylinder, Disk, Furniture, Quad, Sphere
 
-__all__ = ["Layout", "rect_distance"]
+__all__ = ["Layout", "part_bounds", "rect_distance"]
 
 UP = np.array([0.0, 1.0, 0.0])
 _AXES = [np.array([1.0, 0.0, 0.0]), np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0])]
@@ -31,6 +31,25 @@ def rect_distance(rect, x: float, z: float) -> float:
     dx = max(rect[0] - x, 0.0, x - rect[2])
     dz = max(rect[1] - z, 0.0, z - rect[3])
     return math.hypot(dx, dz)
+
+
+def part_bounds(p) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds (lo, hi) of a primitive (world or local frame)."""
+    if p.shape == "box":
+        return np.asarray(p.lo), np.asarray(p.hi)
+    if p.shape == "quad":
+        pts = np.array([p.origin, np.add(p.origin, p.edge_a), np.add(p.origin, p.edge_b),
+                        np.add(np.add(p.origin, p.edge_a), p.edge_b)])
+        return pts.min(0), pts.max(0)
+    if p.shape == "cylinder":
+        b = np.asarray(p.base)
+        r = np.array([p.radius, 0.0, p.radius])
+        return b - r, b + r + np.array([0.0, p.height, 0.0])
+    c = np.asarray(p.center)
+    r = np.full(3, p.radius)
+    if p.shape == "disk":
+        r[1] = 0.0
+    return c - r, c + r
 
 
 def _overlap(a, b, gap: float = 0.0) -> bool:
@@ -61,7 +80,7 @@ class _Frame:
         return "".join(_face_letter(table[f]) for f in local)
 
     def part(self, part):
-        t = lambda v: tuple(float(c) for c in v)  # noqa: E731
+        t = lambda v: tuple(float(c) for c in v)
         if isinstance(part, Box):
             a, b = self.point(part.lo), self.point(part.hi)
             return Box(t(np.minimum(a, b)), t(np.maximum(a, b)), part.material, self.faces(part.faces))
@@ -126,10 +145,16 @@ class Layout:
 
     # -- committing ---------------------------------------------------------------------------
     def _realise(self, piece: Piece, frame: _Frame):
+        """Floor rectangle covered by the piece: its declared footprint united with the
+        bounds of all its parts (foliage, handles and overhangs included)."""
         a = frame.point((-piece.width / 2, 0.0, 0.0))
         b = frame.point((piece.width / 2, 0.0, piece.depth))
-        rect = (min(a[0], b[0]), min(a[2], b[2]), max(a[0], b[0]), max(a[2], b[2]))
-        return rect
+        lo = np.minimum(a, b)
+        hi = np.maximum(a, b)
+        for p in piece.parts:
+            plo, phi = part_bounds(frame.part(p))
+            lo, hi = np.minimum(lo, plo), np.maximum(hi, phi)
+        return (float(lo[0]), float(lo[2]), float(hi[0]), float(hi[2]))
 
     def _commit(self, piece: Piece, frame: _Frame, rect) -> Furniture:
         parts = [frame.part(p) for p in piece.parts]
@@ -206,8 +231,7 @@ class Layout:
             if placed >= count:
                 break
             p, n = spots[i]
-            back = (p[0] - n[0] * 0.0, 0.0, p[2] - n[2] * 0.0)
-            if self.add(make_chair(), back, n) is not None:
+            if self.add(make_chair(), p, n) is not None:
                 placed += 1
         return placed
 

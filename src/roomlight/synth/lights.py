@@ -22,8 +22,15 @@ from roomlight.synth.color import light_rgb
 from roomlight.synth.furniture import Fixture
 from roomlight.synth.spec import Cylinder, Disk, Furniture, Light, Material, Quad
 
-__all__ = ["SCENARIOS", "sample_scenario", "window_count", "lights_on_probability", "ceiling_lights",
-           "fixture_materials", "space_lights"]
+__all__ = [
+    "SCENARIOS",
+    "ceiling_lights",
+    "fixture_materials",
+    "lights_on_probability",
+    "sample_scenario",
+    "space_lights",
+    "window_count",
+]
 
 SCENARIOS = {"sunny": 0.3, "overcast": 0.2, "dusk": 0.15, "night": 0.2, "interior": 0.15}
 SKY_OF = {"sunny": "clear", "overcast": "overcast", "dusk": "dusk", "night": "night", "interior": None}
@@ -53,8 +60,8 @@ def _off(name: str, albedo=(0.75, 0.75, 0.72)) -> Material:
 
 def _grid(c, spacing: float):
     x0, z0, x1, z1 = c
-    nx = max(1, int(round((x1 - x0) / spacing)))
-    nz = max(1, int(round((z1 - z0) / spacing)))
+    nx = max(1, round((x1 - x0) / spacing))
+    nz = max(1, round((z1 - z0) / spacing))
     xs = x0 + (np.arange(nx) + 0.5) * (x1 - x0) / nx
     zs = z0 + (np.arange(nz) + 0.5) * (z1 - z0) / nz
     return [(float(x), float(z)) for x in xs for z in zs]

@@ -13,7 +13,7 @@ from roomlight.synth.color import hsv_albedo
 from roomlight.synth.spec import Material
 from roomlight.synth.textures import make_texture
 
-__all__ = ["room_palette", "bsdf_dict", "emission_texture", "BOOK_MATERIALS", "CANVAS_MATERIALS"]
+__all__ = ["BOOK_MATERIALS", "CANVAS_MATERIALS", "bsdf_dict", "emission_texture", "room_palette"]
 
 BOOK_MATERIALS = tuple(f"book_{i}" for i in range(5))
 CANVAS_MATERIALS = tuple(f"canvas_{i}" for i in range(3))

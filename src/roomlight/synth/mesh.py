@@ -136,7 +136,7 @@ class MeshBuilder:
             self.quad(*table[f])
 
     def _ring(self, r: float):
-        k = max(6, int(round(self.segments * min(1.0, 0.25 + 2.0 * r))))
+        k = max(6, round(self.segments * min(1.0, 0.25 + 2.0 * r)))
         phi = np.linspace(0.0, 2.0 * math.pi, k + 1)
         return k, phi
 

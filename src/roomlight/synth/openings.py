@@ -19,7 +19,7 @@ import numpy as np
 from roomlight.synth.shell import OVERLAP, Shell, WallSeg, oriented_quad, wall_quads
 from roomlight.synth.spec import Box, Door, Window
 
-__all__ = ["Openings", "place_openings", "box_on_wall"]
+__all__ = ["Openings", "box_on_wall", "place_openings"]
 
 UP = np.array([0.0, 1.0, 0.0])
 

@@ -45,7 +45,7 @@ def portal_power(w: Window, sky: Sky) -> tuple[float, float]:
     """Rough (sky, sun) luminous flux through the window (lm-like), for sampling weights."""
     from roomlight.synth.color import luminance
 
-    o, a, b = portal_quad(w)
+    _, a, b = portal_quad(w)
     area = float(np.linalg.norm(np.cross(a, b)))
     l_sky = (luminance(sky.zenith) + luminance(sky.horizon) + luminance(sky.ground)) / 3.0
     sky_flux = math.pi * area * l_sky
@@ -147,8 +147,15 @@ def _portal_class(mi):
             return self
 
         # -- radiance -------------------------------------------------------------------------
-        def _radiance(self, d):
-            r, g, b = sky_radiance(self.params, d.x, d.y, d.z, self.ops, self.tables)
+        def _in_cone(self, d):
+            # The one place that decides "inside the sun's disk": radiance and pdf must agree
+            # exactly at the rim, where the sun strategy puts many of its samples.
+            s = self.sun_dir
+            return d.x * s.x + d.y * s.y + d.z * s.z > self.cos_sun
+
+        def _radiance(self, d, in_cone=None):
+            mask = self._in_cone(d) if in_cone is None else in_cone
+            r, g, b = sky_radiance(self.params, d.x, d.y, d.z, self.ops, self.tables, sun_mask=mask)
             return mi.Color3f(r, g, b)
 
         def eval(self, si, active=True):
@@ -157,9 +164,9 @@ def _portal_class(mi):
             return dr.select(front, self._radiance(d), mi.Color3f(0.0))
 
         # -- sampling -------------------------------------------------------------------------
-        def _pdf(self, d, dist, cos_l):
+        def _pdf(self, d, dist, cos_l, in_cone=None):
             pa = dr.select(cos_l > 0, dist * dist * self.inv_area / dr.maximum(cos_l, 1e-12), 0.0)
-            in_cone = dr.dot(d, self.sun_dir) > self.cos_sun
+            in_cone = self._in_cone(d) if in_cone is None else in_cone
             return self.one_minus_q * pa + dr.select(in_cone, self.q * self.cone_pdf, 0.0)
 
         def sample_direction(self, it, sample, active=True):
@@ -181,9 +188,12 @@ def _portal_class(mi):
             valid = mi.Bool(active) & (~use_sun | hit)
             dv = p - it.p
             dist = dr.norm(dv)
-            d = dv / dr.maximum(dist, 1e-12)
+            # The sun strategy keeps its sampled direction (re-deriving it from the point would
+            # move it by rounding, and at the disk's rim in or out of the disk).
+            d = dr.select(use_sun, dsun, dv / dr.maximum(dist, 1e-12))
             cos_l = -dr.dot(d, self.n)
-            pdf = self._pdf(d, dist, cos_l)
+            in_cone = self._in_cone(d)
+            pdf = self._pdf(d, dist, cos_l, in_cone)
             valid &= (cos_l > 0) & (pdf > 0)
             ds = dr.zeros(mi.DirectionSample3f)
             ds.p = p
@@ -194,7 +204,7 @@ def _portal_class(mi):
             ds.delta = mi.Bool(False)
             ds.d = d
             ds.dist = dist
-            weight = dr.select(valid, self._radiance(d) / dr.select(valid, pdf, 1.0), mi.Color3f(0.0))
+            weight = dr.select(valid, self._radiance(d, in_cone) / dr.select(valid, pdf, 1.0), mi.Color3f(0.0))
             return ds, mi.Spectrum(weight)
 
         def pdf_direction(self, it, ds, active=True):

@@ -12,16 +12,28 @@ import math
 import numpy as np
 
 from roomlight.synth import furniture as fu
-from roomlight.synth.layout import Layout
-from roomlight.synth.lights import (SKY_OF, ceiling_lights, fixture_materials, lights_on_probability,
-                                    sample_scenario, space_lights, window_count)
+from roomlight.synth.layout import Layout, part_bounds
+from roomlight.synth.lights import (
+    SKY_OF,
+    ceiling_lights,
+    fixture_materials,
+    lights_on_probability,
+    sample_scenario,
+    space_lights,
+    window_count,
+)
 from roomlight.synth.materials import CANVAS_MATERIALS, room_palette
 from roomlight.synth.openings import place_openings
-from roomlight.synth.shell import floor_ceiling_quads, sample_shell, wall_quads
+from roomlight.synth.shell import (
+    floor_ceiling_quads,
+    plan_walls,
+    sample_shell,
+    wall_quads,
+)
 from roomlight.synth.sky import sample_sky
 from roomlight.synth.spec import Room
 
-__all__ = ["generate_room", "ROOM_TYPES", "capture_clearance"]
+__all__ = ["ROOM_TYPES", "box_room", "capture_clearance", "generate_room"]
 
 ROOM_TYPES = {"living": 0.3, "bedroom": 0.25, "office": 0.2, "kitchen": 0.15, "hall": 0.1}
 _SALT = 0x526F6F6D  # "Room": separates this stream from other uses of the same seed
@@ -64,9 +76,12 @@ def _living(rng, lay: Layout, names, height):
 
 
 def _bedroom(rng, lay: Layout, names, height):
-    bed = lay.on_wall(rng, fu.bed(rng))
+    bed = None
+    for _ in range(3):
+        bed = lay.on_wall(rng, fu.bed(rng))
+        if bed is not None:
+            break
     if bed is not None:
-        bw = max(bed.hi[0] - bed.lo[0], bed.hi[2] - bed.lo[2]) if False else None  # noqa: F841
         width = _extent_along(bed)
         for side in (-1, 1):
             if rng.random() < 0.8:
@@ -146,38 +161,31 @@ def _capture(rng, shell) -> tuple[float, float, float]:
     return (round(x, 4), round(y, 4), round(z, 4))
 
 
+def _sun_in_view(rng, windows, capture):
+    """A sun direction seen through a window from the capture point (elevation 8-65 deg), or None."""
+    c = np.asarray(capture, np.float64)
+    for _ in range(8):
+        w = windows[int(rng.integers(len(windows)))]
+        s, t = rng.uniform(0.1, 0.9), rng.uniform(0.3, 0.95)
+        p = np.asarray(w.origin) + s * np.asarray(w.edge_a) + t * np.asarray(w.edge_b) - np.asarray(w.normal) * w.depth
+        d = (p - c) / np.linalg.norm(p - c)
+        if math.sin(math.radians(8)) < d[1] < math.sin(math.radians(65)):
+            return tuple(float(v) for v in d)
+    return None
+
+
 def capture_clearance(room: Room) -> float:
     """Smallest distance (m) from the capture point to any part's bounding box or the shell."""
-    from roomlight.synth.shell import distance_to_walls, plan_walls
+    from roomlight.synth.shell import distance_to_walls
 
     c = np.asarray(room.capture)
     best = min(distance_to_walls(plan_walls(room.cells), c[0], c[2]), c[1], room.height - c[1])
     for f in room.furniture:
-        lo, hi = np.asarray(f.lo), np.asarray(f.hi)
         for p in f.parts:
-            plo, phi = _part_bounds(p)
+            plo, phi = part_bounds(p)
             d = np.maximum(np.maximum(plo - c, 0.0), c - phi)
             best = min(best, float(np.linalg.norm(d)))
-        del lo, hi
     return best
-
-
-def _part_bounds(p):
-    if p.shape == "box":
-        return np.asarray(p.lo), np.asarray(p.hi)
-    if p.shape == "quad":
-        pts = np.array([p.origin, np.add(p.origin, p.edge_a), np.add(p.origin, p.edge_b),
-                        np.add(np.add(p.origin, p.edge_a), p.edge_b)])
-        return pts.min(0), pts.max(0)
-    if p.shape == "cylinder":
-        b = np.asarray(p.base)
-        r = np.array([p.radius, 0.0, p.radius])
-        return b - r, b + r + np.array([0.0, p.height, 0.0])
-    c = np.asarray(p.center)
-    r = np.full(3, p.radius)
-    if p.shape == "disk":
-        r[1] = 0.0
-    return c - r, c + r
 
 
 def generate_room(seed: int) -> Room:
@@ -191,8 +199,9 @@ def generate_room(seed: int) -> Room:
     openings = place_openings(rng, shell, window_count(rng, scenario), n_doors)
     if scenario in ("sunny", "overcast", "dusk") and not openings.windows:
         scenario = "interior"
-    sky = sample_sky(rng, SKY_OF[scenario]) if openings.windows else None
     capture = _capture(rng, shell)
+    sun_dir = _sun_in_view(rng, openings.windows, capture) if scenario == "sunny" and rng.random() < 0.4 else None
+    sky = sample_sky(rng, SKY_OF[scenario], sun_dir=sun_dir) if openings.windows else None
     materials = room_palette(rng)
     layout = Layout(shell, openings.keepout, capture)
     area = sum((c[2] - c[0]) * (c[3] - c[1]) for c in shell.cells)
@@ -239,3 +248,36 @@ def generate_room(seed: int) -> Room:
                 yaw=float(rng.uniform(0.0, 2.0 * math.pi)), materials=materials, shell_parts=parts,
                 furniture=layout.furniture + items + sitems, lights=lights + flights + slights,
                 windows=openings.windows, doors=openings.doors, sky=sky)
+
+
+def box_room(size=(4.0, 2.7, 5.0), capture=(1.5, 1.4, 2.0), albedo=(0.6, 0.6, 0.6), emission=None,
+             yaw: float = 0.0, light: bool = True) -> Room:
+    """An empty closed box room ``[0, sx] x [0, sy] x [0, sz]`` (for tests and references).
+
+    Args:
+        size: (sx, sy, sz) metres; sy is the ceiling height.
+        capture: capture point inside the box.
+        albedo: diffuse albedo of every surface.
+        emission: radiance of every surface (e.g. (1, 1, 1) with albedo 0 for a furnace test),
+            or None.
+        light: add a 0.6 m ceiling panel of 2000 nits (ignored when ``emission`` is given).
+    """
+    from roomlight.synth.spec import Furniture, Light, Material, Quad
+
+    sx, sy, sz = (float(v) for v in size)
+    cells = [(0.0, 0.0, sx, sz)]
+    mats = {"surface": Material("surface", "diffuse", albedo, emission=emission)}
+    parts = []
+    for w in plan_walls(cells):
+        parts += wall_quads(w, sy, "surface")
+    parts += floor_ceiling_quads(cells, sy, "surface", "surface")
+    furniture, lights = [], []
+    if emission is None and light:
+        mats["panel"] = Material("panel", "black", emission=(2000.0, 2000.0, 2000.0))
+        cx, cz = sx / 2, sz / 2
+        furniture.append(Furniture("ceiling_panels", (cx - 0.3, sy - 0.01, cz - 0.3), (cx + 0.3, sy, cz + 0.3),
+                                   [Quad((cx - 0.3, sy - 0.005, cz - 0.3), (0.6, 0, 0), (0, 0, 0.6), "panel")]))
+        lights.append(Light("panel", "panel", (cx, sy, cz), math.pi * 0.36 * 2000.0))
+    return Room(seed=0, shell="box", room_type="empty", lighting="interior", height=sy, cells=[list(c) for c in cells],
+                capture=tuple(float(v) for v in capture), yaw=float(yaw), materials=mats, shell_parts=parts,
+                furniture=furniture, lights=lights)

@@ -21,7 +21,7 @@ from roomlight.synth.mesh import MeshArrays, MeshBuilder
 from roomlight.synth.portal import portal_emitter, portal_power, portal_quad
 from roomlight.synth.spec import Room
 
-__all__ = ["build_scene", "room_meshes", "DEFAULT_MAX_DEPTH"]
+__all__ = ["DEFAULT_MAX_DEPTH", "build_scene", "room_meshes"]
 
 #: Path length limit (Mitsuba's ``max_depth``: 1 = emitters seen directly, 2 = direct
 #: lighting, 5 = three indirect bounces).

@@ -15,13 +15,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 import numpy as np
 
 from roomlight.synth.spec import Quad
 
-__all__ = ["WallSeg", "Shell", "OVERLAP", "sample_shell", "plan_walls", "inside", "oriented_quad",
-           "wall_quads", "floor_ceiling_quads", "distance_to_walls"]
+__all__ = [
+    "OVERLAP",
+    "Shell",
+    "WallSeg",
+    "distance_to_walls",
+    "floor_ceiling_quads",
+    "inside",
+    "oriented_quad",
+    "plan_walls",
+    "sample_shell",
+    "wall_quads",
+]
 
 OVERLAP = 1e-3
 
@@ -98,7 +109,7 @@ def plan_walls(cells) -> list[WallSeg]:
                  (2, z0, +1, x0, x1, xs), (2, z1, -1, x0, x1, xs)]
         for axis, c, sign, lo, hi, breaks in sides:
             cuts = [lo] + [b for b in breaks if lo + eps < b < hi - eps] + [hi]
-            for a, b in zip(cuts[:-1], cuts[1:]):
+            for a, b in pairwise(cuts):
                 m = 0.5 * (a + b)
                 probe = c - sign * 1e-4
                 outside = not (inside(cells, probe, m) if axis == 0 else inside(cells, m, probe))
@@ -187,8 +198,8 @@ def wall_quads(wall: WallSeg, height: float, material: str, y_lo: float = 0.0, f
     ys = sorted({y_lo, height} | {v for o in wall.openings for v in o[2:] if y_lo < v < height})
     n = -wall.normal if flip else wall.normal
     quads = []
-    for ta, tb in zip(ts[:-1], ts[1:]):
-        for ya, yb in zip(ys[:-1], ys[1:]):
+    for ta, tb in pairwise(ts):
+        for ya, yb in pairwise(ys):
             if tb - ta < 1e-6 or yb - ya < 1e-6:
                 continue
             tm, ym = 0.5 * (ta + tb), 0.5 * (ya + yb)

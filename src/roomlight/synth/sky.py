@@ -23,8 +23,16 @@ import numpy as np
 from roomlight.synth.color import kelvin_rgb, light_rgb, luminance
 from roomlight.synth.spec import Sky
 
-__all__ = ["SKY_KINDS", "SKYLINE_BINS", "sample_sky", "sky_radiance", "sky_tables", "SkyParams", "NumpyOps",
-           "sun_solid_angle"]
+__all__ = [
+    "SKYLINE_BINS",
+    "SKY_KINDS",
+    "NumpyOps",
+    "SkyParams",
+    "sample_sky",
+    "sky_radiance",
+    "sky_tables",
+    "sun_solid_angle",
+]
 
 SKY_KINDS = ("clear", "overcast", "dusk", "night")
 SKYLINE_BINS = 180
@@ -65,8 +73,11 @@ def _skyline(rng: np.random.Generator, e_h: float, kind: str) -> tuple[list, lis
     return heights.tolist(), facade.tolist()
 
 
-def sample_sky(rng: np.random.Generator, kind: str, sun_radius_deg: float = 0.5) -> Sky:
+def sample_sky(rng: np.random.Generator, kind: str, sun_radius_deg: float = 0.5, sun_dir=None) -> Sky:
     """Random outdoor environment of the given kind (``clear``, ``overcast``, ``dusk``, ``night``).
+
+    ``sun_dir`` (unit vector towards the sun, above the horizon) fixes the sun's direction of
+    a clear sky instead of drawing it (used to put the sun in view of a window).
 
     Luminances (nits): clear zenith 1.5-5 k with a 1.3-2.5x brighter horizon and a sun of
     30-100 klx; overcast zenith 0.8-6 k; dusk 10-400; night 0.005-1 with orange light pollution.
@@ -83,6 +94,9 @@ def sample_sky(rng: np.random.Generator, kind: str, sun_radius_deg: float = 0.5)
         exponent = rng.uniform(0.3, 0.6)
         elev = math.radians(rng.uniform(8.0, 70.0))
         az = rng.uniform(0.0, 2.0 * math.pi)
+        if sun_dir is not None:
+            v = np.asarray(sun_dir, np.float64) / np.linalg.norm(sun_dir)
+            elev, az = math.asin(float(v[1])), math.atan2(float(v[0]), -float(v[2]))
         sun_dir = (math.sin(az) * math.cos(elev), math.sin(elev), -math.cos(az) * math.cos(elev))
         air_mass = 1.0 / max(math.sin(elev), 0.05)
         e_sun = 1.2e5 * 0.7 ** (air_mass ** 0.678)
@@ -174,7 +188,7 @@ def sky_tables(sky: Sky) -> tuple[np.ndarray, ...]:
     return sk, fac[:, 0].copy(), fac[:, 1].copy(), fac[:, 2].copy()
 
 
-def sky_radiance(sky, x, y, z, ops=NumpyOps, tables=None):
+def sky_radiance(sky, x, y, z, ops=NumpyOps, tables=None, sun_mask=None):
     """Radiance (nits) arriving from unit directions (x, y, z) (world frame, y up).
 
     Args:
@@ -182,6 +196,9 @@ def sky_radiance(sky, x, y, z, ops=NumpyOps, tables=None):
         x, y, z: direction components (arrays of one shape), pointing *away* from the room.
         ops: array API (:class:`NumpyOps`, or the Dr.Jit one of the portal emitter).
         tables: :func:`sky_tables` arrays in the ops' type; computed from ``sky`` when None.
+        sun_mask: which directions fall in the sun's disk, when the caller has decided it
+            already (the portal emitter decides once so that its radiance and sampling pdf
+            agree bit for bit at the disk's rim); default ``cos(angle to sun) > cos(radius)``.
     Returns:
         (r, g, b) arrays like ``x``.
     """
@@ -200,7 +217,7 @@ def sky_radiance(sky, x, y, z, ops=NumpyOps, tables=None):
     skyline_h = ops.gather(tables[0], b)
     blocked = (y < skyline_h) & (y >= 0.0)
     below = y < 0.0
-    in_sun = (cos_sun > p.cos_sun_radius) & ~blocked & ~below
+    in_sun = ((cos_sun > p.cos_sun_radius) if sun_mask is None else sun_mask) & ~blocked & ~below
     out = []
     for c in range(3):
         v = p.horizon[c] + (p.zenith[c] - p.horizon[c]) * t + p.glow[c] * glow

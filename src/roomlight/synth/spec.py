@@ -13,15 +13,30 @@ area emitters are one-sided, so shell quads face into the room and solids face o
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from typing import Union
 
 __all__ = [
-    "Vec3", "Material", "Quad", "Box", "Cylinder", "Disk", "Sphere", "Part", "part_from_dict",
-    "Furniture", "Light", "Window", "Door", "Sky", "Room", "GENERATOR_VERSION",
+    "GENERATOR_VERSION",
+    "Box",
+    "Cylinder",
+    "Disk",
+    "Door",
+    "Furniture",
+    "Light",
+    "Material",
+    "Part",
+    "Quad",
+    "Room",
+    "Sky",
+    "Sphere",
+    "Vec3",
+    "Window",
+    "part_from_dict",
 ]
 
-#: Bumped whenever the same seed would produce a different room.
-GENERATOR_VERSION = "1"
+#: Bumped whenever the same seed would produce a different room (2: furniture footprints include
+#: every part, so plant foliage keeps 0.4 m from the capture point; the sun is put in view of a
+#: window in 40 % of sunny rooms).
+GENERATOR_VERSION = "2"
 
 Vec3 = tuple[float, float, float]
 
@@ -122,7 +137,7 @@ class Sphere:
     shape: str = "sphere"
 
 
-Part = Union[Quad, Box, Cylinder, Disk, Sphere]
+Part = Quad | Box | Cylinder | Disk | Sphere
 _PART_TYPES = {"quad": Quad, "box": Box, "cylinder": Cylinder, "disk": Disk, "sphere": Sphere}
 
 
@@ -273,7 +288,7 @@ class Room:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Room":
+    def from_dict(cls, d: dict) -> Room:
         """Rebuild a room from :meth:`to_dict` (``full=True``) output."""
         d = dict(d)
         d["materials"] = {k: Material(**v) for k, v in d["materials"].items()}
