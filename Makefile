@@ -19,7 +19,7 @@ $(STAMP): pyproject.toml scripts/ensure_llvm.sh
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@$(PY) -m pip install -q --upgrade pip
 	@$(PY) -c "import torch" 2>/dev/null || $(PY) -m pip install -q "$(TORCH_SPEC)"
-	@$(PY) -m pip install -q -e ".[test]"
+	@$(PY) -m pip install -q -e ".[test,denoise]"
 	@touch $(STAMP)
 
 info: $(STAMP)
