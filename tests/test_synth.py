@@ -78,6 +78,42 @@ def test_resume_skips_finished_samples(small_set):
     assert s["rendered"] == 0 and s["skipped_existing"] == 4
 
 
+def test_resume_with_other_shape_or_splits_is_refused(small_set):
+    from roomlight.errors import RoomlightError
+    from roomlight.synth.dataset import SynthConfig, generate_dataset
+
+    out, _ = small_set
+    before = sorted(p.name for p in out.glob("*/room-*.exr"))
+    with pytest.raises(RoomlightError, match="height 8 -> 16"):
+        generate_dataset(out, SynthConfig(n=4, seed0=10, height=16, spp=4), progress=False)
+    with pytest.raises(RoomlightError, match="n 4 -> 5"):
+        generate_dataset(out, SynthConfig(n=5, seed0=10, height=8, spp=4), progress=False)
+    with pytest.warns(UserWarning, match="spp=4"):  # only the noise level changes: allowed, but said
+        s = generate_dataset(out, SynthConfig(n=4, seed0=10, height=8, spp=9), progress=False)
+    assert s["rendered"] == 0 and sorted(p.name for p in out.glob("*/room-*.exr")) == before
+
+
+def test_cli_denoises_by_default_when_pyoidn_is_there(tmp_path, monkeypatch):
+    import json
+    import sys
+
+    from click.testing import CliRunner
+
+    from roomlight.cli.main import cli as main
+
+    out = tmp_path / "d"
+    r = CliRunner().invoke(main, ["synth", "--n", "1", "--res", "16x32", "--out", str(out), "--no-summary"])
+    assert r.exit_code == 0, r.output
+    assert json.loads((out / "synth.json").read_text()) == {"n": 1, "seed0": 0, "height": 16, "spp": 64,
+                                                          "nadir_cap": 0.0, "denoise": True}
+    monkeypatch.setitem(sys.modules, "pyoidn", None)
+    out = tmp_path / "p"
+    r = CliRunner().invoke(main, ["synth", "--n", "1", "--res", "16x32", "--out", str(out), "--no-summary"])
+    assert r.exit_code == 0, r.output
+    assert "without denoising" in r.output
+    assert json.loads((out / "synth.json").read_text())["spp"] == 144
+
+
 def test_splits_and_shards_partition_the_seed_range():
     from roomlight.synth.dataset import split_of
 

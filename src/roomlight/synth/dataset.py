@@ -47,7 +47,7 @@ class SynthConfig:
     n: int = 500                  #: number of samples (seeds seed0 .. seed0 + n - 1)
     seed0: int = 0                #: first seed
     height: int = 128             #: panorama height (width 2x)
-    spp: int = 128                #: samples per pixel of the path tracer
+    spp: int = 144                #: samples per pixel of the path tracer (a perfect square)
     shard: tuple[int, int] = (0, 1)  #: (i, n): this process renders seeds with seed % n == i
     workers: int = 1              #: worker processes
     nadir_cap: float = 0.0        #: simulate a tripod blind spot: black cap of this polar angle (deg)
@@ -160,9 +160,12 @@ def generate_dataset(out, cfg: SynthConfig, progress: bool = True) -> dict:
     seeds = [s for s in range(cfg.seed0, cfg.seed0 + cfg.n) if s % k == i]
     todo = [s for s in seeds if not sample_path(out, s, cfg.seed0, cfg.n).is_file()]
     out.mkdir(parents=True, exist_ok=True)
-    (out / "synth.json").write_text(json.dumps({"n": cfg.n, "seed0": cfg.seed0, "height": cfg.height,
-                                                 "spp": cfg.spp, "nadir_cap": cfg.nadir_cap, "denoise": cfg.denoise},
-                                                indent=2))
+    settings = {"n": cfg.n, "seed0": cfg.seed0, "height": cfg.height, "spp": cfg.spp, "nadir_cap": cfg.nadir_cap,
+                "denoise": cfg.denoise}
+    _check_resume(out, settings, len(seeds) - len(todo))
+    tmp = out / "synth.json.tmp"
+    tmp.write_text(json.dumps(settings, indent=2))
+    os.replace(tmp, out / "synth.json")
     threads = max(1, (os.cpu_count() or 1) // cfg.workers) if cfg.workers > 1 else 0
     jobs = [(s, str(sample_path(out, s, cfg.seed0, cfg.n)), cfg.n, cfg.seed0, cfg.height, cfg.spp, cfg.nadir_cap,
              threads, cfg.denoise) for s in todo]
@@ -190,6 +193,38 @@ def generate_dataset(out, cfg: SynthConfig, progress: bool = True) -> dict:
                "panoramas_per_minute": round(60.0 * (len(jobs) - len(failures)) / wall, 2) if jobs and wall > 0 else None,
                "median_seconds_per_panorama": round(float(np.median(seconds)), 3) if seconds else None}
     return summary
+
+
+#: Settings that decide which file a seed goes to and its shape: resuming must keep them.
+_RESUME_FIXED = ("n", "seed0", "height")
+
+
+def _check_resume(out: Path, settings: dict, finished: int) -> None:
+    """Refuse to add to a folder rendered with other split/shape settings (it would silently mix
+    resolutions or move seeds between splits); settings that only change noise are allowed."""
+    prev_path = out / "synth.json"
+    if not prev_path.is_file():
+        return
+    try:
+        prev = json.loads(prev_path.read_text())
+    except (OSError, json.JSONDecodeError):
+        return
+    differ = [k for k in _RESUME_FIXED if k in prev and prev[k] != settings[k]]
+    if differ and finished == 0 and not any(out.glob("*/room-*.exr")):
+        return  # nothing rendered yet under the old settings
+    if differ:
+        names = ", ".join(f"{k} {prev[k]} -> {settings[k]}" for k in differ)
+        raise RoomlightError(
+            f"{out} holds a dataset rendered with other settings ({names}); resuming would mix them. "
+            "Use the same --n/--seed/--res, or a new --out folder.")
+    noisy = [k for k in ("spp", "denoise", "nadir_cap") if k in prev and prev[k] != settings[k]]
+    if noisy:
+        import warnings
+
+        warnings.warn(f"{out}: earlier samples were rendered with " +
+                      ", ".join(f"{k}={prev[k]}" for k in noisy) + "; new ones use " +
+                      ", ".join(f"{k}={settings[k]}" for k in noisy) + " (each file's metadata records its own)",
+                      stacklevel=2)
 
 
 def _account(seed, err, sec, failures, seconds, bar):
