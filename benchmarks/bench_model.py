@@ -8,7 +8,7 @@
   fresh subprocess, minus its size before the step; CUDA: torch.cuda.max_memory_allocated).
 
 Prints a Markdown table of medians (first runs excluded as warm-up).
-Run: .venv/bin/python benchmarks/bench_model.py [--threads 2] [--repeats 5] [--device cpu|cuda]
+Run: .venv/bin/python benchmarks/bench_model.py [--threads 2] [--repeats 5] [--device cpu|cuda] [--decode-only]
 """
 
 from __future__ import annotations
@@ -113,6 +113,7 @@ def main():
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--train-repeats", type=int, default=3)
     ap.add_argument("--device", default="cuda" if torch.cuda.is_available() else "cpu")
+    ap.add_argument("--decode-only", action="store_true", help="skip the training and memory rows")
     ap.add_argument("--memory-child", nargs=3, metavar=("PRESET", "BATCH", "THREADS"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.memory_child:
@@ -133,6 +134,29 @@ def main():
         rows.append((f"decode default 128x256, batch {b}", t * 1e3, "ms"))
         if b == 32:
             rows.append(("decode default 128x256, batch 32, per panorama", t * 1e3 / 32, "ms"))
+    # Same run, same model: the literal upsampling (repeat + pad + 3x3 conv) the decoder used before
+    # its phase decomposition, and bf16 autocast (fast where the CPU has AMX / AVX512-BF16).
+    from roomlight.model.blocks import Upsample
+
+    z = torch.randn(1, model.config.latent_dim, device=dev)
+    fused = Upsample.forward
+    Upsample.forward = Upsample.reference_forward
+    try:
+        with torch.no_grad():
+            t_ref = median_time(lambda: model.decode(z), args.repeats, sync=sync)
+            ref = model.decode_normalized(z).float()
+    finally:
+        Upsample.forward = fused
+    with torch.no_grad():
+        t_new = median_time(lambda: model.decode(z), args.repeats, sync=sync)
+    rows.append(("decode default batch 1, literal upsampling (before)", t_ref * 1e3, "ms"))
+    rows.append(("decode default batch 1, phase-decomposed upsampling", t_new * 1e3, "ms"))
+    rows.append(("  speed-up, same run", t_ref / t_new, "x"))
+    with torch.no_grad(), torch.autocast(dev, dtype=torch.bfloat16):
+        t_bf = median_time(lambda: model.decode(z), args.repeats, sync=sync)
+        err = (model.decode_normalized(z).float() - ref).pow(2).mean().sqrt().item()
+    rows.append(("decode default batch 1, bf16 autocast", t_bf * 1e3, "ms"))
+    rows.append(("  bf16 RMS error in normalised units (data std 1)", err, ""))
     if not cuda and args.threads != 1:
         # On a shared machine a second thread can cost more than it brings: show one thread too.
         torch.set_num_threads(1)
@@ -142,7 +166,7 @@ def main():
         rows.append(("decode default 128x256, batch 1, 1 thread", t * 1e3, "ms"))
         torch.set_num_threads(args.threads)
 
-    for preset, batch in (("default", 32), ("small", 32), ("tiny", 32)):
+    for preset, batch in () if args.decode_only else (("default", 32), ("small", 32), ("tiny", 32)):
         m = make_model(preset, dev)
         step = train_step_fn(m, batch, dev, amp=cuda)
         reps = args.train_repeats if preset == "default" else args.repeats
@@ -152,7 +176,9 @@ def main():
         rows.append((f"training throughput {preset} {h}x{w}", batch / t, "panoramas/s"))
         del m, step
 
-    if cuda:
+    if args.decode_only:
+        pass
+    elif cuda:
         m = make_model("default", dev)
         torch.cuda.reset_peak_memory_stats()
         step = train_step_fn(m, 32, dev, amp=True)

@@ -165,11 +165,21 @@ def test_padded_conv_matches_reference_and_is_roll_equivariant(stride):
 
 
 def test_upsample_is_nearest_then_conv():
-    up = Upsample(2, 3).double()
-    x = torch.randn(1, 2, 4, 8, dtype=torch.float64)
-    big = x.repeat_interleave(2, dim=2).repeat_interleave(2, dim=3)
-    ref = F.conv2d(ref_spherical_pad(big), up.conv.conv.weight, up.conv.conv.bias)
-    torch.testing.assert_close(up(x), ref)
+    """The phase-decomposed forward equals the definition (repeat, spherical pad, 3x3 conv) in
+    value and in gradients w.r.t. input, weight and bias; odd widths take the literal path."""
+    torch.manual_seed(0)
+    up = Upsample(3, 5).double()
+    for shape in ((1, 3, 4, 8), (2, 3, 6, 12), (2, 3, 3, 5)):
+        x = torch.randn(*shape, dtype=torch.float64, requires_grad=True)
+        big = x.repeat_interleave(2, dim=2).repeat_interleave(2, dim=3)
+        ref = F.conv2d(ref_spherical_pad(big), up.conv.conv.weight, up.conv.conv.bias)
+        out = up(x)
+        torch.testing.assert_close(out, ref)
+        g = torch.randn_like(ref)
+        got = torch.autograd.grad(out, (x, up.conv.conv.weight, up.conv.conv.bias), g)
+        want = torch.autograd.grad(ref, (x, up.conv.conv.weight, up.conv.conv.bias), g)
+        for a, b in zip(got, want):
+            torch.testing.assert_close(a, b)
 
 
 def test_encoder_feature_maps_and_decoder_are_roll_equivariant():

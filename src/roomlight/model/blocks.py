@@ -15,7 +15,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from roomlight.geometry.padding import SphericalPad
+from roomlight.geometry.padding import SphericalPad, spherical_pad
 
 __all__ = [
     "SphericalConv2d",
@@ -56,14 +56,44 @@ class Upsample(nn.Module):
 
     (B, C_in, H, W) -> (B, C_out, 2H, 2W). Nearest (not bilinear) keeps the operation exactly
     equivariant to longitude rolls and matches the authors' network.
+
+    Computed without materialising the upsampled map: after a nearest x2 upsampling each
+    output pixel's 3x3 window covers only 2x2 distinct input pixels, so each of the four output
+    phases (row parity a, column parity b) is a 2x2 convolution of the (spherically padded)
+    low-resolution input with the 3x3 kernel's rows and columns summed pairwise. That is 16
+    multiply-adds per input pixel instead of 36, and the padding happens at low resolution
+    (spherical padding commutes with nearest upsampling when W is even). The weights are the
+    same 3x3 ``conv.conv.weight``; :meth:`reference_forward` is the literal definition.
     """
 
     def __init__(self, in_channels: int, out_channels: int):
         super().__init__()
         self.conv = SphericalConv2d(in_channels, out_channels)
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
+    def reference_forward(self, x: torch.Tensor) -> torch.Tensor:
+        """The definition: upsample, pad, 3x3 conv (slower; used by tests)."""
         return self.conv(F.interpolate(x, scale_factor=2.0, mode="nearest"))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        b, _, h, w = x.shape
+        if w % 2:  # spherical padding of the low-resolution map needs an even width
+            return self.reference_forward(x)
+        weight, bias = self.conv.conv.weight, self.conv.conv.bias
+        out_ch = weight.shape[0]
+        # Rows of the window for output row 2i + a: a = 0 -> input rows (i-1, i) with kernel rows
+        # (0, 1 + 2); a = 1 -> input rows (i, i+1) with kernel rows (0 + 1, 2). Same for columns.
+        rows = (torch.stack([weight[:, :, 0], weight[:, :, 1] + weight[:, :, 2]], 2),
+                torch.stack([weight[:, :, 0] + weight[:, :, 1], weight[:, :, 2]], 2))
+        kernels = [torch.stack(cols, -1) for r in rows
+                   for cols in ((r[..., 0], r[..., 1] + r[..., 2]), (r[..., 0] + r[..., 1], r[..., 2]))]
+        y = F.conv2d(spherical_pad(x, 1), torch.cat(kernels, 0), bias.repeat(4) if bias is not None else None)
+        y = y.view(b, 2, 2, out_ch, h + 1, w + 1)  # (B, a, b, C_out, H+1, W+1)
+        # phase (a, b) at input pixel (i, j) is the 2x2 window starting at padded (i + a, j + b)
+        out = y.new_empty(b, out_ch, h, 2, w, 2)
+        for a in (0, 1):
+            for c in (0, 1):
+                out[:, :, :, a, :, c] = y[:, a, c, :, a:a + h, c:c + w]
+        return out.view(b, out_ch, 2 * h, 2 * w)
 
 
 class ResBlock(nn.Module):
