@@ -275,14 +275,18 @@ def write_stats(out) -> dict:
 
 
 def contact_sheet(out, count: int = 24, columns: int = 4) -> Path:
-    """``contact_sheet.png``: tone-mapped radiance of the first ``count`` samples."""
+    """``contact_sheet.png``: tone-mapped radiance of the first ``count`` samples.
+
+    Samples are calibrated to unit log-average luminance; the sheet maps that average to
+    photographic middle grey (0.18, i.e. -2.47 stops) before clipping and gamma 2.2, as a camera's
+    auto-exposure would, so walls are not washed out and only light sources saturate."""
     from roomlight.io import read_panorama, save_png
     from roomlight.io.preview import tonemap_gamma
 
     files = _files(out)[:count]
     if not files:
         raise RoomlightError(f"{out}: no samples for a contact sheet")
-    tiles = [tonemap_gamma(read_panorama(p).radiance) for p in files]
+    tiles = [tonemap_gamma(read_panorama(p).radiance, exposure_stops=math.log2(0.18)) for p in files]
     h, w, _ = tiles[0].shape
     rows = math.ceil(len(tiles) / columns)
     sheet = np.zeros((rows * (h + 2), columns * (w + 2), 3), np.uint8)
