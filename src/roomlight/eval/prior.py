@@ -85,14 +85,19 @@ def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), b
             rows["latent fit (depth only)"] = FitConfig(**{**fit_config.to_dict(), "target": "depth"})
     per_image, skipped = [], []
     values: dict[str, dict[str, list]] = {r: {} for r in rows}
-    bar = tqdm(total=len(dataset), desc="eval-prior", unit="pano", disable=not progress)
+    # The bar counts work units: one per batch for the encoder pass, one per latent-fit step, so a
+    # 1500-step fit moves it continuously instead of leaving it at 0 % for minutes.
+    n_batches = math.ceil(len(dataset) / batch_size)
+    per_batch = 1 + sum(cfg.steps for cfg in rows.values() if cfg is not None)
+    bar = tqdm(total=n_batches * per_batch, desc="eval-prior", unit="step", disable=not progress)
+    done = 0
     for start in range(0, len(dataset), batch_size):
         batch = collate_panoramas([dataset[i] for i in range(start, min(start + batch_size, len(dataset)))])
         skipped += [{"name": n, "reason": r} for n, r in batch["skipped"]]
         for n, r in batch["skipped"]:
             note(f"skipping {n}: {r}")
         if batch["radiance"] is None:
-            bar.update(len(batch["skipped"]))
+            bar.update(per_batch)
             continue
         rad, dep = batch["radiance"].to(device), batch["depth"].to(device)
         records = [{"name": n} for n in batch["names"]]
@@ -100,9 +105,12 @@ def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), b
             if cfg is None:
                 with torch.no_grad():
                     pr, pd = model.decode(model.encode(rad, dep).mean)
+                bar.update(1)
             else:
+                bar.set_postfix_str(f"{row}, panoramas {done}-{done + len(batch['names'])} of {len(dataset)}")
                 res = fit_latent(model, rad if cfg.target != "depth" else None,
-                                 dep if cfg.target != "radiance" else None, cfg)
+                                 dep if cfg.target != "radiance" else None, cfg,
+                                 callback=lambda step, loss: bar.update(1))
                 pr, pd = res.radiance, res.depth
             m = panorama_metrics(pr, pd, rad, dep, lpips_fn)
             for k, v in m.items():
@@ -110,7 +118,7 @@ def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), b
                 for rec, val in zip(records, v.tolist()):
                     rec.setdefault(row, {})[k] = val
         per_image += records
-        bar.update(len(batch["names"]) + len(batch["skipped"]))
+        done += len(batch["names"]) + len(batch["skipped"])
     bar.close()
     means = {row: {k: _mean(v) for k, v in vals.items()} for row, vals in values.items()}
     return {"count": len(per_image), "rows": means, "per_image": per_image, "skipped": skipped,
