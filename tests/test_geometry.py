@@ -95,6 +95,21 @@ def test_spherical_pad_matches_slow_reference(p):
     assert torch.equal(spherical_pad(x, p), slow_spherical_pad(x, p))
 
 
+@pytest.mark.parametrize("p", [1, 2])
+def test_spherical_pad_with_fused_silu_equals_padding_the_activation(p):
+    x = torch.randn(2, 3, 6, 12, dtype=torch.float64, requires_grad=True)
+    ref = slow_spherical_pad(torch.nn.functional.silu(x), p)
+    with torch.no_grad():  # the fused path writes SiLU straight into the padded buffer
+        torch.testing.assert_close(spherical_pad(x, p, silu=True), ref.detach(), rtol=0, atol=1e-15)
+    # with autograd: same values and the gradient of the composition
+    y = spherical_pad(x, p, silu=True)
+    torch.testing.assert_close(y, ref, rtol=0, atol=1e-15)
+    w = torch.randn_like(ref)
+    (g,) = torch.autograd.grad((y * w).sum(), x)
+    (g_ref,) = torch.autograd.grad((ref * w).sum(), x)
+    torch.testing.assert_close(g, g_ref)
+
+
 def test_padding_neighbour_across_pole_is_half_a_turn_away():
     h, w = 8, 16
     x = torch.arange(h * w, dtype=torch.float32).reshape(1, 1, h, w)
