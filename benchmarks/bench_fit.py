@@ -5,10 +5,12 @@ median seconds per iteration over ``--iterations`` steps after one warm-up step 
 The prior methods run a default-configuration PanoVAE (13.9 M parameters, 128x256 output) with
 random weights: the time per step does not depend on the weights.
 
+Fits render only the mask's bounding box (the default); ``--compare-crop`` adds whole-frame rows.
+
 Settings: ``cpu`` = the fast preset's per-step work at 128x128, 16 spp; ``paper`` = the paper's
 fitted view, 1000x1000 at 64 spp (slow on a CPU: use --paper-iterations 2).
 
-Run: .venv/bin/python benchmarks/bench_fit.py [--settings cpu paper] [--iterations 6]
+Run: .venv/bin/python benchmarks/bench_fit.py [--settings cpu paper] [--iterations 6] [--compare-crop]
 """
 
 from __future__ import annotations
@@ -40,10 +42,10 @@ def build_scene(root: Path, width: int, height: int):
     return load_scene(path)
 
 
-def time_method(scene, method, model, spp, iterations):
+def time_method(scene, method, model, spp, iterations, crop=True):
     from roomlight.inverse import FitConfig, build_fitter, make_light
 
-    cfg = FitConfig(iterations=iterations + 1, spp=spp, eval_every=10**9)
+    cfg = FitConfig(iterations=iterations + 1, spp=spp, eval_every=10**9, crop_to_mask=crop)
     light = make_light(method, scene, cfg, model)
     fitter = build_fitter(scene, light, cfg)
     res = fitter.run(progress=False)
@@ -58,6 +60,8 @@ def main():
     ap.add_argument("--paper-iterations", type=int, default=2)
     ap.add_argument("--methods", nargs="+", default=["direct-envmap", "direct-sphere", "direct-al", "prior-envmap",
                                                      "prior"])
+    ap.add_argument("--compare-crop", action="store_true",
+                    help="also time every method rendering the whole frame (crop_to_mask=False)")
     args = ap.parse_args()
 
     from roomlight.model import ModelConfig, Normalization, PanoVAE
@@ -74,11 +78,13 @@ def main():
         for name in args.settings:
             w, h, spp, its = settings[name]
             scene = build_scene(Path(tmp) / name, w, h)
-            res = {m: time_method(scene, m, model, spp, its) for m in args.methods}
-            base = res.get("direct-envmap")
-            for m, t in res.items():
-                ratio = f"{t / base:.2f}" if base else "-"
-                print(f"| {name} ({w}x{h}, {spp} spp) | {m} | {t:.3f} | {ratio} |")
+            for crop in (True, False) if args.compare_crop else (True,):
+                res = {m: time_method(scene, m, model, spp, its, crop) for m in args.methods}
+                base = res.get("direct-envmap")
+                label = "" if crop else ", whole frame"
+                for m, t in res.items():
+                    ratio = f"{t / base:.2f}" if base else "-"
+                    print(f"| {name} ({w}x{h}, {spp} spp{label}) | {m} | {t:.3f} | {ratio} |", flush=True)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"\npeak resident memory of this process: {peak:.0f} MiB")
 

@@ -129,3 +129,21 @@ def test_demo_runs(tmp_path):
 
     summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
     assert summary["methods"][-1] == "direct-envmap" and summary["methods"][0] in ("prior", "direct-al")
+
+
+@pytest.mark.mitsuba
+def test_fit_command_outputs_and_whole_frame_flag(tmp_path):
+    import json
+
+    from helpers_scene import make_tiny_scene
+
+    make_tiny_scene(tmp_path / "scene")
+    for flag, cropped in (((), True), (("--whole-frame",), False)):
+        out = tmp_path / f"fit{len(flag)}"
+        r = run("fit", tmp_path / "scene", "--method", "direct-envmap", "--preset", "fast", "--iterations", 2,
+                "--spp", 2, "--out", out, "--quiet", *flag)
+        assert r.exit_code == 0, r.output
+        res = json.loads((out / "result.json").read_text())
+        assert res["config"]["crop_to_mask"] is cropped
+        for name in ("panorama.exr", "loss.png", "preview.png", "history.jsonl"):
+            assert (out / name).is_file()

@@ -10,6 +10,7 @@ from roomlight.inverse import (
     repulsion_penalty, smoothness,
 )
 from roomlight.inverse.config import fit_config
+from roomlight.inverse.fit import mask_window
 from roomlight.errors import RoomlightError
 
 from helpers_scene import make_tiny_scene
@@ -70,6 +71,19 @@ def test_unknown_method_and_missing_model():
         fit_config("fast", not_a_field=1)
 
 
+def test_mask_window_by_hand():
+    mask = torch.zeros(20, 30, dtype=torch.bool)
+    mask[5:8, 10:12] = True
+    mask[9, 14] = True
+    # rows 5..9, cols 10..14, grown by 2 -> rows 3..11, cols 8..16
+    assert mask_window(mask, margin=2) == (8, 3, 9, 9)
+    mask[0, 0] = True  # growth clipped at the border: rows 0..11, cols 0..16
+    assert mask_window(mask, margin=2) == (0, 0, 17, 12)
+    mask[19, 29] = True
+    assert mask_window(mask, margin=2) is None  # the whole frame: no crop
+    assert mask_window(torch.zeros(4, 4, dtype=torch.bool)) is None
+
+
 # ------------------------------------------------------------------------ end-to-end fits
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
@@ -88,6 +102,33 @@ def test_envmap_and_area_light_share_the_image_objective(tiny):
     assert torch.equal(a.target, e.target) and torch.equal(a.mask, e.mask)
     for k in ("l2", "log", "img"):
         assert float(ta[k]) == float(te[k])
+
+
+@pytest.mark.mitsuba
+def test_fitting_window_renders_the_same_pixels_as_the_full_frame(tiny):
+    # The cropped film must show the masked pixels exactly where the full frame has them, with
+    # the same expected value: compare high-spp renders of the window against the full frame.
+    scene, rad, depth = tiny
+    cfg = FitConfig(iterations=1, spp=4, direct_resolution=tuple(depth.shape))
+    full = build_fitter(scene, make_light("direct-al", scene, cfg.override(crop_to_mask=False)),
+                        cfg.override(crop_to_mask=False))
+    crop = build_fitter(scene, make_light("direct-al", scene, cfg), cfg)
+    assert full.window is None and crop.window is not None
+    x0, y0, w, h = crop.window
+    assert torch.equal(crop.target, full.target[y0:y0 + h, x0:x0 + w])
+    assert torch.equal(crop.mask, full.mask[y0:y0 + h, x0:x0 + w]) and crop.mask.sum() == full.mask.sum()
+    assert w * h < full.mask.numel()
+    for f in (full, crop):
+        f.escene.set_emitter(rad, depth)
+    img_full = full.escene.render(spp=256, seed=3)[y0:y0 + h, x0:x0 + w]
+    img_crop = crop.escene.render(spp=256, seed=5, sensor=crop.sensor)
+    assert img_crop.shape == img_full.shape
+    m = crop.mask
+    a, b = img_crop[m], img_full[m]
+    assert float((a.mean() - b.mean()).abs() / b.mean()) < 0.02          # same expected value
+    assert float((a - b).abs().mean() / b.mean()) < 0.15                 # pixel by pixel (noise only)
+    shifted = torch.roll(img_full, 3, dims=1)[m]                         # a 3-pixel misplacement fails
+    assert float((a - shifted).abs().mean()) > 1.5 * float((a - b).abs().mean())
 
 
 @pytest.mark.slow

@@ -32,6 +32,8 @@ from roomlight.inverse.methods import METHODS
 @click.option("--z-prior", type=float, default=None, help="Gaussian prior weight on the latent (real photos).")
 @click.option("--fit-depth-scale", is_flag=True, default=None, help="Also fit a global scale of the decoded depth.")
 @click.option("--pixel-subset", type=float, default=None, help="Fraction of object pixels in the loss per step.")
+@click.option("--whole-frame", "crop_to_mask", flag_value=False, default=None,
+              help="Render every pixel each step (default: only the mask's bounding box, which the loss sees).")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def command(scene, method, out_dir, model, preset, quiet, **overrides):
     """Fit the illumination of SCENE (a scene.json/.yaml or its directory) with --method.

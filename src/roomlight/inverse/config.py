@@ -37,6 +37,7 @@ class FitConfig:
     pixel_subset: float = 1.0             #: fraction of object pixels in the loss each step
     eval_every: int = 10                  #: best-iterate check period (fixed-seed re-evaluation)
     eval_spp: int | None = None           #: spp of the best-iterate check (default: spp)
+    crop_to_mask: bool = True             #: render only the mask's bounding box while fitting
     view: str = "input"                   #: the scene view to fit
     image: str = "ldr"                    #: target: 'ldr' (8-bit recording) or 'hdr' (linear EXR)
 

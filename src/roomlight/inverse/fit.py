@@ -11,6 +11,13 @@ candidates then see the same random numbers (common random numbers), their diffe
 the parameters rather than the noise, and the best of them under this fixed-seed objective
 is kept.
 
+Rendering window. The loss only sees masked pixels, so by default each step renders just the
+mask's bounding box grown by :data:`CROP_MARGIN_PX` (a film crop of the same camera): the
+masked pixels get the same estimate as in the full frame, and the time that the other pixels
+would cost (mostly camera rays that hit the emitter directly, which are expensive for a
+2.5D mesh light and free for an env map) is not spent. ``FitConfig.crop_to_mask = False``
+renders the whole frame.
+
 Non-finite values. A step whose loss or gradient has a NaN/inf is skipped (the parameters
 and Adam's moments are untouched), counted, and recorded in the history; many in a row stop
 the fit with an error naming the iteration.
@@ -33,10 +40,28 @@ from roomlight.inverse.lights import LightModel
 from roomlight.inverse.objective import image_loss
 from roomlight.inverse.repulsion import repulsion_penalty
 
-__all__ = ["FitResult", "Fitter", "MAX_NONFINITE_IN_A_ROW"]
+__all__ = ["FitResult", "Fitter", "MAX_NONFINITE_IN_A_ROW", "CROP_MARGIN_PX", "mask_window"]
 
 MAX_NONFINITE_IN_A_ROW = 20
 EVAL_SEED_OFFSET = 1_000_003  # the fixed best-iterate seed never coincides with a training seed
+#: Pixels kept around the mask's bounding box: at least the radius of Mitsuba's widest default
+#: pixel filter (gaussian, 2 px), so that no masked pixel loses filter support at the window's edge.
+CROP_MARGIN_PX = 4
+
+
+def mask_window(mask: torch.Tensor, margin: int = CROP_MARGIN_PX) -> tuple[int, int, int, int] | None:
+    """(x0, y0, width, height) of the (H, W) mask's bounding box grown by ``margin`` pixels and
+    clipped to the image; None when that is the whole image (or the mask is empty)."""
+    rows = torch.nonzero(mask.any(1)).flatten()
+    cols = torch.nonzero(mask.any(0)).flatten()
+    if rows.numel() == 0:
+        return None
+    h, w = mask.shape
+    y0, y1 = max(int(rows[0]) - margin, 0), min(int(rows[-1]) + 1 + margin, h)
+    x0, x1 = max(int(cols[0]) - margin, 0), min(int(cols[-1]) + 1 + margin, w)
+    if (x0, y0, x1, y1) == (0, 0, w, h):
+        return None
+    return x0, y0, x1 - x0, y1 - y0
 
 
 @dataclass
@@ -73,14 +98,34 @@ class Fitter:
         target: (H, W, 3) linear target image; mask: (H, W) bool object pixels.
         points: (M, 3) object surface points for the repulsion term, or None.
         config: the settings.
+        sensor_dict: the view's sensor as a Mitsuba dict (needed with ``window``).
+        window: (x0, y0, width, height) of the image region to render while fitting (see
+            :func:`mask_window`), or None for the whole frame.
+
+    ``target`` and ``mask`` attributes hold the fitted window; ``full_target`` and ``full_mask``
+    the whole frame (for previews, rendered with the scene's own sensor).
     """
 
     def __init__(self, light: LightModel, escene, target: torch.Tensor, mask: torch.Tensor,
-                 points: torch.Tensor | None, config: FitConfig):
+                 points: torch.Tensor | None, config: FitConfig, sensor_dict: dict | None = None,
+                 window: tuple[int, int, int, int] | None = None):
         self.light, self.escene, self.config = light, escene, config
-        self.target, self.mask = target.float(), mask.bool()
-        if int(self.mask.sum()) == 0:
+        self.full_target, self.full_mask = target.float(), mask.bool()
+        if int(self.full_mask.sum()) == 0:
             raise RoomlightError("fit: the mask selects no pixel of the target image")
+        self.window = window
+        if window is None:
+            self.sensor = 0  # the scene's own sensor: the whole frame
+            self.target, self.mask = self.full_target, self.full_mask
+        else:
+            from roomlight.render.camera import cropped_sensor
+
+            if sensor_dict is None:
+                raise RoomlightError("Fitter: a rendering window needs the view's sensor dict")
+            x0, y0, w, h = window
+            self.sensor = escene.mi.load_dict(cropped_sensor(sensor_dict, x0, y0, w, h))
+            self.target = self.full_target[y0:y0 + h, x0:x0 + w]
+            self.mask = self.full_mask[y0:y0 + h, x0:x0 + w]
         self.points = points if (points is not None and light.has_depth and config.lambda_rep > 0) else None
         params = [p for p in light.parameters() if p.requires_grad]
         self.params = params
@@ -115,7 +160,7 @@ class Fitter:
         with torch.no_grad():
             rad, depth = self.light.emitter()
             self.escene.set_emitter(rad, depth)
-            img = self.escene.render(spp=c.eval_spp or c.spp, seed=c.seed + EVAL_SEED_OFFSET)
+            img = self.escene.render(spp=c.eval_spp or c.spp, seed=c.seed + EVAL_SEED_OFFSET, sensor=self.sensor)
             return float(self.terms(img, rad, depth, self.mask)["total"])
 
     # ------------------------------------------------------------------ loop
@@ -151,7 +196,8 @@ class Fitter:
                 self.optimizer.zero_grad(set_to_none=True)
                 rad, depth = self.light.emitter()
                 seed = c.seed + 2 * it
-                img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1)
+                img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1,
+                                            sensor=self.sensor)
                 terms = self.terms(img, rad, depth, self._mask_subset())
                 loss = terms["total"]
                 ok = bool(torch.isfinite(loss))

@@ -17,7 +17,7 @@ import numpy as np
 
 from roomlight.errors import RoomlightError
 from roomlight.inverse.config import FitConfig
-from roomlight.inverse.fit import FitResult, Fitter
+from roomlight.inverse.fit import FitResult, Fitter, mask_window
 from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
 
 __all__ = ["METHODS", "make_light", "enclosing_sphere_radius", "build_fitter", "fit_scene"]
@@ -55,11 +55,12 @@ def build_fitter(scene, light: LightModel, config: FitConfig) -> Fitter:
 
     view = scene.view(config.view)
     target, mask = load_view_target(view, config.image)
-    escene = EmitterScene(light.kind, light.resolution, objects=view_objects(scene, view),
-                          sensor=view.camera.sensor(),
+    sensor = view.camera.sensor()
+    escene = EmitterScene(light.kind, light.resolution, objects=view_objects(scene, view), sensor=sensor,
                           integrator={"type": "prb", "max_depth": int(config.max_depth)})
     points = scene_points(scene, view.objects, config.repulsion_points, seed=config.seed) if light.has_depth else None
-    return Fitter(light, escene, target, mask, points, config)
+    window = mask_window(mask) if config.crop_to_mask else None
+    return Fitter(light, escene, target, mask, points, config, sensor_dict=sensor, window=window)
 
 
 def fit_scene(scene, method: str, config: FitConfig | None = None, out_dir=None, model=None,
@@ -80,5 +81,5 @@ def fit_scene(scene, method: str, config: FitConfig | None = None, out_dir=None,
     if out is not None:
         from roomlight.inverse.outputs import write_fit_outputs
 
-        write_fit_outputs(out, result, fitter, target=fitter.target, mask=fitter.mask)
+        write_fit_outputs(out, result, fitter, target=fitter.full_target, mask=fitter.full_mask)
     return result

@@ -17,7 +17,7 @@ __all__ = ["render_differentiable"]
 
 def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: torch.Tensor | None = None,
                           spp: int = 16, seed: int = 0, seed_grad: int | None = None,
-                          spp_grad: int | None = None, sensor: int = 0) -> torch.Tensor:
+                          spp_grad: int | None = None, sensor: int | object = 0) -> torch.Tensor:
     """Differentiable render of ``escene`` lit by (radiance, depth).
 
     Args:
@@ -30,7 +30,7 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
         seed_grad: seed of the adjoint pass (default ``seed + 1``). Mitsuba requires it to differ
             from ``seed`` so that the gradient's noise is independent of the primal's.
         spp_grad: samples per pixel of the adjoint pass (default ``spp``).
-        sensor: index of the scene's sensor to render.
+        sensor: index of the scene's sensor to render, or a Mitsuba sensor object (e.g. a cropped copy).
     Returns:
         (H_img, W_img, 3) float32 linear image on the variant's device, attached to torch's
         autograd graph.

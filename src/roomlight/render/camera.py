@@ -5,7 +5,7 @@ from __future__ import annotations
 from roomlight.errors import RoomlightError
 from roomlight.render.variant import mitsuba
 
-__all__ = ["perspective_sensor"]
+__all__ = ["perspective_sensor", "cropped_sensor"]
 
 
 def perspective_sensor(origin=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0),
@@ -34,3 +34,17 @@ def perspective_sensor(origin=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0,
                  "rfilter": {"type": pixel_filter}},
         "sampler": {"type": "independent"},
     }
+
+
+def cropped_sensor(sensor: dict, x0: int, y0: int, width: int, height: int) -> dict:
+    """A copy of a sensor dict whose film renders only the window [y0, y0+height) x [x0, x0+width).
+
+    The pixels inside the window have the same distribution as in the full frame (same
+    camera rays, same filter); ``mi.render`` then returns a (height, width, C) image.
+    """
+    film = dict(sensor["film"])
+    fw, fh = int(film["width"]), int(film["height"])
+    if not (0 <= x0 < x0 + width <= fw and 0 <= y0 < y0 + height <= fh):
+        raise RoomlightError(f"camera: crop window x {x0}+{width}, y {y0}+{height} is outside the {fw}x{fh} film")
+    film.update(crop_offset_x=int(x0), crop_offset_y=int(y0), crop_width=int(width), crop_height=int(height))
+    return {**sensor, "film": film}
