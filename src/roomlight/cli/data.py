@@ -30,7 +30,7 @@ def command():
 @click.argument("data_dir", type=click.Path(exists=True, file_okay=False))
 @click.option("--res", type=RESOLUTION, default=None, help="Training resolution HxW (default: the --config model's).")
 @click.option("--config", "preset", default="default", show_default=True,
-              type=click.Choice(["default", "small", "tiny"]), help="Model preset giving the resolution.")
+              type=click.Choice(["default", "small", "compact", "tiny"]), help="Model preset giving the resolution.")
 @click.option("--split", default="train", show_default=True, type=click.Choice(["train", "val", "test", "all"]))
 @click.option("--depth-units", default="metres", show_default=True, type=click.Choice(["metres", "scale-free"]))
 @click.option("--no-calibrate", is_flag=True, help="Do not exposure-calibrate radiance (it normally is).")
@@ -67,7 +67,7 @@ def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path):
 @click.argument("data_dir", type=click.Path(exists=True, file_okay=False))
 @click.option("--res", type=RESOLUTION, default=None, help="Training resolution HxW (default: the --config model's).")
 @click.option("--config", "preset", default="default", show_default=True,
-              type=click.Choice(["default", "small", "tiny"]))
+              type=click.Choice(["default", "small", "compact", "tiny"]))
 @click.option("--dtype", default="float16", show_default=True, type=click.Choice(["float16", "float32"]))
 @click.option("--depth-units", default="metres", show_default=True, type=click.Choice(["metres", "scale-free"]))
 @click.option("--workers", type=int, default=2, show_default=True, help="Processes decoding EXRs.")

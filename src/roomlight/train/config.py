@@ -170,12 +170,13 @@ RESUME_SAFE_FIELDS = frozenset({
 })
 
 #: Named configurations paired with the model presets. ``default`` is the paper's recipe;
-#: ``small`` trains the 64 x 128 model with the same recipe; ``tiny`` is for tests and smoke runs
+#: ``small`` and ``compact`` train the 64 x 128 and 32 x 64 models with the same recipe; ``tiny`` is for tests and smoke runs
 #: (16 x 32 model, batch 4, higher learning rate, short warm-ups, frequent checkpoints, no worker
 #: processes, 3 gradient-loss octaves since a 4th would be only 2 x 4 pixels).
 TRAIN_PRESETS: dict[str, TrainConfig] = {
     "default": TrainConfig(),
     "small": TrainConfig(model="small", image_every=500, ckpt_every=500),
+    "compact": TrainConfig(model="compact", image_every=500, ckpt_every=500),
     "tiny": TrainConfig(
         model="tiny", batch_size=4, epochs=100, lr=2e-3, min_lr=1e-4, warmup_steps=10,
         loss={**LossConfig().to_dict(), "kl_warmup_steps": 100, "grad_levels": 3},
@@ -185,7 +186,7 @@ TRAIN_PRESETS: dict[str, TrainConfig] = {
 
 
 def get_train_preset(name: str) -> TrainConfig:
-    """The training preset called ``name`` (``default``, ``small`` or ``tiny``)."""
+    """The training preset called ``name`` (``default``, ``small``, ``compact`` or ``tiny``)."""
     try:
         return TRAIN_PRESETS[name]
     except KeyError:
