@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
 from roomlight.eval import abs_rel, evaluate_prior, load_lpips, psnr, psnr_hdr, report_markdown, ssim, to_ldr
-from roomlight.eval.metrics import gaussian_window
+from roomlight.eval.metrics import gaussian_window, peak_error_stops
 from roomlight.fit import FitConfig
 from roomlight.model import Normalization, PanoVAE, get_preset
 
@@ -76,6 +76,18 @@ def test_psnr_hdr_psnr_and_absrel_hand_values():
     assert abs_rel(p, d).tolist() == pytest.approx([0.1, 4 * 0.5 / 32])
 
 
+def test_peak_error_in_stops_by_hand():
+    t = torch.full((2, 3, 4, 8), 0.5)
+    t[:, :, 1, 2] = 8.0                      # the light: luminance 8
+    p = t.clone()
+    p[0, :, 1, 2] = 2.0                      # two stops too dim
+    p[1, :, 1, 2] = 0.5                      # light lost entirely: the brightest pixel is 0.5
+    p[1, 1, 3, 7] = 64.0                     # ... but a green pixel of luminance 0.7152*64 + 0.5*(0.2126+0.0722)
+    expected = [2.0, abs(math.log2((0.7152 * 64 + 0.5 * 0.2848) / 8.0))]
+    assert peak_error_stops(p, t).tolist() == pytest.approx(expected, abs=1e-12)
+    assert float(peak_error_stops(t, t)[0]) == 0.0
+
+
 def test_ldr_mapping_uses_the_targets_exposure():
     flat = torch.full((1, 3, 4, 8), 7.0)  # luminance 7 everywhere
     assert torch.allclose(to_ldr(flat), torch.full_like(flat, 0.18 ** (1 / 2.2)), atol=1e-5)
@@ -104,7 +116,7 @@ def test_evaluate_prior_report(setup):
     assert list(rep["rows"]) == ["encoder", "latent fit", "latent fit (depth only)"]
     fn, reason = load_lpips()
     for row in rep["rows"].values():
-        assert {"psnr_ldr", "ssim_ldr", "psnr_hdr", "abs_rel"} <= set(row)
+        assert {"psnr_ldr", "ssim_ldr", "psnr_hdr", "peak_stops", "abs_rel"} <= set(row)
         assert ("lpips_ldr" in row) == (fn is not None)
     if fn is None:
         assert rep["lpips"].startswith("LPIPS not computed") and any("LPIPS" in n for n in notes)
@@ -118,6 +130,7 @@ def test_evaluate_prior_report(setup):
     with torch.no_grad():
         pr, pd = model.decode(model.encode(rad, dep).mean)
     assert rep["rows"]["encoder"]["abs_rel"] == pytest.approx(float(abs_rel(pd, dep).mean()), rel=1e-5)
+    assert rep["rows"]["encoder"]["peak_stops"] == pytest.approx(float(peak_error_stops(pr, rad).mean()), rel=1e-5)
 
 
 def test_eval_prior_cli_writes_markdown_and_json(setup, tmp_path):

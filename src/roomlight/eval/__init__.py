@@ -10,10 +10,10 @@
 from __future__ import annotations
 
 from roomlight.eval.lpips import load_lpips
-from roomlight.eval.metrics import abs_rel, log_average_luminance, psnr, psnr_hdr, ssim, to_ldr
+from roomlight.eval.metrics import abs_rel, log_average_luminance, peak_error_stops, psnr, psnr_hdr, ssim, to_ldr
 from roomlight.eval.prior import evaluate_prior, panorama_metrics, report_markdown, write_report
 from roomlight.eval.samples import decode_latents, interpolate_latents, probe_layout, render_probes, sample_latents
 
-__all__ = ["abs_rel", "log_average_luminance", "psnr", "psnr_hdr", "ssim", "to_ldr", "evaluate_prior",
+__all__ = ["abs_rel", "log_average_luminance", "peak_error_stops", "psnr", "psnr_hdr", "ssim", "to_ldr", "evaluate_prior",
            "panorama_metrics", "report_markdown", "write_report", "load_lpips", "decode_latents",
            "interpolate_latents", "probe_layout", "render_probes", "sample_latents"]

@@ -4,6 +4,9 @@
   luminance is 0.18, clip to [0, 1], gamma 2.2; the prediction uses the target's exposure), then
   :func:`psnr` (data range 1) and :func:`ssim`.
 - HDR: :func:`psnr_hdr` on linear radiance, with the target's maximum as the peak signal.
+- Light sources: :func:`peak_error_stops`, |log2| of the ratio of the brightest pixels'
+  luminances: how far the strongest emitter is off, which PSNR barely sees (lights cover a few
+  pixels) yet decides how a prior relights objects.
 - Depth: :func:`abs_rel`, mean |D_pred - D| / D.
 
 All functions take batches and return one value per image, (B,) float64, so callers can average
@@ -20,7 +23,7 @@ import torch.nn.functional as F
 from roomlight.errors import ShapeError
 
 __all__ = ["LDR_KEY", "log_average_luminance", "to_ldr", "psnr", "psnr_hdr", "ssim", "abs_rel",
-           "gaussian_window"]
+           "peak_error_stops", "gaussian_window"]
 
 #: Log-average luminance the LDR mapping exposes to ("middle grey").
 LDR_KEY = 0.18
@@ -107,6 +110,19 @@ def ssim(pred: torch.Tensor, target: torch.Tensor, data_range: float = 1.0, wind
     c1, c2 = (k1 * data_range) ** 2, (k2 * data_range) ** 2
     s = ((2 * mx * my + c1) * (2 * sxy + c2)) / ((mx * mx + my * my + c1) * (sxx + syy + c2))
     return s.flatten(1).mean(1)
+
+
+def peak_error_stops(pred: torch.Tensor, target: torch.Tensor, floor: float = 1e-12) -> torch.Tensor:
+    """(B,) |log2(max luminance of pred / max luminance of target)| per image, in stops.
+
+    pred, target: (B, 3, H, W) linear radiance on the same exposure scale. 0 when the brightest
+    pixels are equally bright; 3 when one is 8x the other. Luminances below ``floor`` count as it.
+    """
+    _check(pred, target, "peak_error_stops")
+    w = torch.tensor(_LUMA, dtype=torch.float64, device=pred.device).view(1, 3, 1, 1)
+    peak_p = (pred.double() * w).sum(1).flatten(1).amax(1).clamp_min(floor)
+    peak_t = (target.double() * w).sum(1).flatten(1).amax(1).clamp_min(floor)
+    return torch.log2(peak_p / peak_t).abs()
 
 
 def abs_rel(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:

@@ -7,7 +7,7 @@ For every panorama of an evaluation set, two reconstructions are scored:
   (:func:`roomlight.fit.fit_latent`, the paper's 1500-step protocol by default).
 
 Metrics (:mod:`roomlight.eval.metrics`): PSNR, SSIM (and LPIPS when available locally) on
-tone-mapped LDR, PSNR on linear HDR, AbsRel on depth. The report is a dict (JSON) with means per
+tone-mapped LDR, PSNR on linear HDR, the brightest pixel's error in stops, AbsRel on depth. The report is a dict (JSON) with means per
 row and per-image values, and renders as a Markdown table.
 """
 
@@ -21,7 +21,7 @@ import torch
 
 from roomlight.data.dataset import collate_panoramas
 from roomlight.eval.lpips import load_lpips
-from roomlight.eval.metrics import abs_rel, psnr, psnr_hdr, ssim, to_ldr
+from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim, to_ldr
 from roomlight.fit.latent import FitConfig, fit_latent
 
 __all__ = ["METRICS", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
@@ -32,6 +32,7 @@ METRICS = {
     "ssim_ldr": ("SSIM LDR ↑", True),
     "lpips_ldr": ("LPIPS LDR ↓", False),
     "psnr_hdr": ("PSNR HDR ↑", True),
+    "peak_stops": ("Peak error (stops) ↓", False),
     "abs_rel": ("AbsRel depth ↓", False),
 }
 
@@ -49,7 +50,8 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
     ldr_t = to_ldr(radiance.float())
     ldr_p = to_ldr(pred_radiance.float(), reference=radiance.float())
     out = {"psnr_ldr": psnr(ldr_p, ldr_t).cpu(), "ssim_ldr": ssim(ldr_p, ldr_t).cpu(),
-           "psnr_hdr": psnr_hdr(pred_radiance, radiance).cpu(), "abs_rel": abs_rel(pred_depth, depth).cpu()}
+           "psnr_hdr": psnr_hdr(pred_radiance, radiance).cpu(),
+           "peak_stops": peak_error_stops(pred_radiance, radiance).cpu(), "abs_rel": abs_rel(pred_depth, depth).cpu()}
     if lpips_fn is not None:
         out["lpips_ldr"] = lpips_fn(ldr_p, ldr_t)
     return out
@@ -160,7 +162,8 @@ def report_markdown(report: dict, title: str = "Prior evaluation") -> str:
         lines.append(f"Latent fit: Adam, {f['steps']} steps, lr {f['lr']} → {f['lr_final']} (exponential), "
                      "squared error of the normalised channels.")
     lines.append("LDR: exposure so that the target's log-average luminance is 0.18, clip, gamma 2.2. "
-                 "HDR PSNR: peak = the target's maximum. AbsRel: mean |D̂ − D| / D.")
+                 "HDR PSNR: peak = the target's maximum. Peak error: |log2| of the ratio of the brightest "
+                 "pixels' luminances (the strongest light). AbsRel: mean |D̂ − D| / D.")
     return "\n".join(lines) + "\n"
 
 
