@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
 from roomlight.eval import abs_rel, evaluate_prior, load_lpips, psnr, psnr_hdr, report_markdown, ssim, to_ldr
-from roomlight.eval.metrics import gaussian_window, peak_error_stops
+from roomlight.eval.metrics import gaussian_window, peak_contrast, peak_error_stops
 from roomlight.fit import FitConfig
 from roomlight.model import Normalization, PanoVAE, get_preset
 
@@ -86,6 +86,12 @@ def test_peak_error_in_stops_by_hand():
     expected = [2.0, abs(math.log2((0.7152 * 64 + 0.5 * 0.2848) / 8.0))]
     assert peak_error_stops(p, t).tolist() == pytest.approx(expected, abs=1e-12)
     assert float(peak_error_stops(t, t)[0]) == 0.0
+
+
+def test_peak_contrast_by_hand():
+    r = torch.full((1, 3, 4, 8), 0.25)
+    r[0, :, 0, 0] = 10.0                     # 31 pixels at 0.25 and one at 10: median 0.25
+    assert float(peak_contrast(r)[0]) == pytest.approx(40.0, rel=1e-12)
 
 
 def test_ldr_mapping_uses_the_targets_exposure():

@@ -108,6 +108,12 @@ def test_sample_cli_without_rendering_is_deterministic(model_dir, tmp_path):
     z = torch.tensor(json.loads((tmp_path / "a" / "latents.json").read_text())["z"])
     rad, dep = decode_latents(model, z)
     np.testing.assert_allclose(a.depth, dep[2, 0].numpy(), rtol=1e-6)
+    # the reported peak contrast is the written panorama's brightest / median luminance
+    contrast = json.loads((tmp_path / "a" / "latents.json").read_text())["peak_contrast"]
+    lum = a.radiance.astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722])
+    assert len(contrast) == 3
+    assert contrast[2] == pytest.approx(lum.max() / np.sort(lum.ravel())[(lum.size - 1) // 2], rel=1e-5)
+    assert "brightest pixel / median luminance: median" in res.output
 
 
 def test_interpolation_cli_starts_at_the_first_panorama(model_dir, tmp_path):

@@ -60,6 +60,7 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
     """
     from roomlight.emitter.export import export_emitter
     from roomlight.eval.figures import interpolation_strip, samples_figure
+    from roomlight.eval.metrics import peak_contrast
     from roomlight.eval.samples import (decode_latents, interpolate_latents, probe_layout, render_probes,
                                         sample_latents)
     from roomlight.io import write_exr, write_panorama
@@ -101,6 +102,9 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
                 f"({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) r={r:.2f}" for c, r in probes), err=True)
     samples_figure(out / "samples.png", rad, dep, renders or None,
                    title=f"{count} samples of {model_path} (seed {seed}, temperature {temperature:g})")
-    (out / "latents.json").write_text(json.dumps({"seed": seed, "temperature": temperature,
-                                                  "z": z.tolist()}) + "\n")
+    contrast = peak_contrast(rad)
+    (out / "latents.json").write_text(json.dumps({"seed": seed, "temperature": temperature, "z": z.tolist(),
+                                                  "peak_contrast": contrast.tolist()}) + "\n")
+    click.echo(f"brightest pixel / median luminance: median {contrast.median():.1f}x "
+               f"(range {contrast.min():.1f}-{contrast.max():.1f}x)")
     click.echo(f"{count} samples -> {out} (figure: {out / 'samples.png'})")

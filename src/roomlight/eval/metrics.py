@@ -23,7 +23,7 @@ import torch.nn.functional as F
 from roomlight.errors import ShapeError
 
 __all__ = ["LDR_KEY", "log_average_luminance", "to_ldr", "psnr", "psnr_hdr", "ssim", "abs_rel",
-           "peak_error_stops", "gaussian_window"]
+           "peak_error_stops", "peak_contrast", "gaussian_window"]
 
 #: Log-average luminance the LDR mapping exposes to ("middle grey").
 LDR_KEY = 0.18
@@ -123,6 +123,17 @@ def peak_error_stops(pred: torch.Tensor, target: torch.Tensor, floor: float = 1e
     peak_p = (pred.double() * w).sum(1).flatten(1).amax(1).clamp_min(floor)
     peak_t = (target.double() * w).sum(1).flatten(1).amax(1).clamp_min(floor)
     return torch.log2(peak_p / peak_t).abs()
+
+
+def peak_contrast(radiance: torch.Tensor) -> torch.Tensor:
+    """(B,) brightest pixel's luminance over the median luminance, per (B, 3, H, W) panorama.
+
+    Needs no reference, so it also describes samples: six procedural 64 x 128 rooms measured
+    26-162x; a prior whose decoded rooms sit near 2x shows no light sources.
+    """
+    w = torch.tensor(_LUMA, dtype=torch.float64, device=radiance.device).view(1, 3, 1, 1)
+    lum = (radiance.double() * w).sum(1).flatten(1)
+    return lum.amax(1) / lum.median(1).values.clamp_min(1e-12)
 
 
 def abs_rel(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
