@@ -142,7 +142,7 @@ def test_fit_pano_cli_writes_a_better_fit(model, toy, tmp_path):
     rec = json.loads((tmp_path / "fit" / "latent.json").read_text())
     z0 = torch.zeros(1, model.config.latent_dim)
     assert rec["objective"] < float(objective(model, rad[:1], dep[:1], z0)[0])
-    assert set(rec["metrics"]) == {"psnr_ldr", "ssim_ldr", "psnr_hdr", "abs_rel"}
+    assert set(rec["metrics"]) == {"psnr_ldr", "ssim_ldr", "psnr_hdr", "peak_stops", "abs_rel"}
     fit = read_panorama(tmp_path / "fit" / "fit.exr")
     assert fit.radiance.shape == (16, 32, 3) and fit.depth.shape == (16, 32)
     for name in ("target.exr", "comparison.png", "emitter/emitter.ply", "emitter/scene.xml"):
