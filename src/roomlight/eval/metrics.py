@@ -21,13 +21,13 @@ import torch
 import torch.nn.functional as F
 
 from roomlight.errors import ShapeError
+from roomlight.losses.peak import luminance
 
 __all__ = ["LDR_KEY", "log_average_luminance", "to_ldr", "psnr", "psnr_hdr", "ssim", "abs_rel",
            "peak_error_stops", "peak_contrast", "gaussian_window"]
 
 #: Log-average luminance the LDR mapping exposes to ("middle grey").
 LDR_KEY = 0.18
-_LUMA = (0.2126, 0.7152, 0.0722)
 
 
 def _check(pred: torch.Tensor, target: torch.Tensor, what: str) -> None:
@@ -38,9 +38,7 @@ def _check(pred: torch.Tensor, target: torch.Tensor, what: str) -> None:
 
 def log_average_luminance(radiance: torch.Tensor) -> torch.Tensor:
     """(B, 3, H, W) linear RGB -> (B,) exp(mean log(Y + 1e-6)) with Rec.709 luminance Y."""
-    w = torch.tensor(_LUMA, dtype=radiance.dtype, device=radiance.device).view(1, 3, 1, 1)
-    y = (radiance.clamp_min(0.0) * w).sum(1)
-    return torch.exp(torch.log(y + 1e-6).flatten(1).mean(1))
+    return torch.exp(torch.log(luminance(radiance.clamp_min(0.0)).flatten(1) + 1e-6).mean(1))
 
 
 def to_ldr(radiance: torch.Tensor, reference: torch.Tensor | None = None, key: float = LDR_KEY,
@@ -119,9 +117,8 @@ def peak_error_stops(pred: torch.Tensor, target: torch.Tensor, floor: float = 1e
     pixels are equally bright; 3 when one is 8x the other. Luminances below ``floor`` count as it.
     """
     _check(pred, target, "peak_error_stops")
-    w = torch.tensor(_LUMA, dtype=torch.float64, device=pred.device).view(1, 3, 1, 1)
-    peak_p = (pred.double() * w).sum(1).flatten(1).amax(1).clamp_min(floor)
-    peak_t = (target.double() * w).sum(1).flatten(1).amax(1).clamp_min(floor)
+    peak_p = luminance(pred.double()).flatten(1).amax(1).clamp_min(floor)
+    peak_t = luminance(target.double()).flatten(1).amax(1).clamp_min(floor)
     return torch.log2(peak_p / peak_t).abs()
 
 
@@ -131,8 +128,7 @@ def peak_contrast(radiance: torch.Tensor) -> torch.Tensor:
     Needs no reference, so it also describes samples: six procedural 64 x 128 rooms measured
     26-162x; a prior whose decoded rooms sit near 2x shows no light sources.
     """
-    w = torch.tensor(_LUMA, dtype=torch.float64, device=radiance.device).view(1, 3, 1, 1)
-    lum = (radiance.double() * w).sum(1).flatten(1)
+    lum = luminance(radiance.double()).flatten(1)
     return lum.amax(1) / lum.median(1).values.clamp_min(1e-12)
 
 
