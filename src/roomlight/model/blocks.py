@@ -15,7 +15,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from roomlight.geometry.padding import SphericalPad, spherical_pad
+from roomlight.geometry.padding import spherical_pad
 
 __all__ = [
     "SphericalConv2d",
@@ -37,12 +37,11 @@ class SphericalConv2d(nn.Module):
 
     def __init__(self, in_channels: int, out_channels: int, stride: int = 1):
         super().__init__()
-        self.pad = SphericalPad(1)
         self.conv = nn.Conv2d(in_channels, out_channels, kernel_size=3, stride=stride, padding=0)
 
     def forward(self, x: torch.Tensor, silu: bool = False) -> torch.Tensor:
         """conv(pad(x)), or conv(pad(SiLU(x))) with ``silu`` (fused, see :func:`spherical_pad`)."""
-        return self.conv(spherical_pad(x, self.pad.pad, silu=silu))
+        return self.conv(spherical_pad(x, 1, silu=silu))
 
 
 class Downsample(SphericalConv2d):
