@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from roomlight.cli.common import RESOLUTION, RoomlightGroup
+from roomlight.model.config import PRESETS
 
 
 def _resolution(res, preset):
@@ -30,7 +31,7 @@ def command():
 @click.argument("data_dir", type=click.Path(exists=True, file_okay=False))
 @click.option("--res", type=RESOLUTION, default=None, help="Training resolution HxW (default: the --config model's).")
 @click.option("--config", "preset", default="default", show_default=True,
-              type=click.Choice(["default", "small", "compact", "tiny"]), help="Model preset giving the resolution.")
+              type=click.Choice(list(PRESETS)), help="Model preset giving the resolution.")
 @click.option("--split", default="train", show_default=True, type=click.Choice(["train", "val", "test", "all"]))
 @click.option("--depth-units", default="metres", show_default=True, type=click.Choice(["metres", "scale-free"]))
 @click.option("--no-calibrate", is_flag=True, help="Do not exposure-calibrate radiance (it normally is).")
@@ -67,7 +68,7 @@ def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path):
 @click.argument("data_dir", type=click.Path(exists=True, file_okay=False))
 @click.option("--res", type=RESOLUTION, default=None, help="Training resolution HxW (default: the --config model's).")
 @click.option("--config", "preset", default="default", show_default=True,
-              type=click.Choice(["default", "small", "compact", "tiny"]))
+              type=click.Choice(list(PRESETS)))
 @click.option("--dtype", default="float16", show_default=True, type=click.Choice(["float16", "float32"]))
 @click.option("--depth-units", default="metres", show_default=True, type=click.Choice(["metres", "scale-free"]))
 @click.option("--workers", type=int, default=2, show_default=True, help="Processes decoding EXRs.")

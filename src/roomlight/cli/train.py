@@ -7,6 +7,7 @@ import json
 import click
 
 from roomlight.cli.common import fail
+from roomlight.train.config import TRAIN_PRESETS
 
 
 def parse_overrides(items) -> dict:
@@ -36,7 +37,7 @@ def parse_overrides(items) -> dict:
 @click.option("--out", "run_dir", required=True, type=click.Path(file_okay=False),
               help="Run folder; if it holds checkpoints, training continues from the newest.")
 @click.option("--config", "preset", default="default", show_default=True,
-              type=click.Choice(["default", "small", "compact", "tiny"]), help="Training + model preset.")
+              type=click.Choice(list(TRAIN_PRESETS)), help="Training + model preset.")
 @click.option("--batch-size", type=int, default=None, help="Global batch size (over all processes).")
 @click.option("--epochs", type=int, default=None)
 @click.option("--max-steps", type=int, default=None, help="Train exactly this many steps instead of --epochs.")
