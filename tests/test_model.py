@@ -57,7 +57,7 @@ def _tiny_norm() -> Normalization:
 
 # ----------------------------------------------------------------------------- config
 def test_presets_are_valid_and_round_trip():
-    for name in ("default", "small", "compact", "tiny"):
+    for name in ("default", "small", "compact", "lite", "tiny"):
         cfg = get_preset(name)
         assert ModelConfig.from_dict(json.loads(json.dumps(cfg.to_dict()))) == cfg
     assert get_preset("default") == ModelConfig()

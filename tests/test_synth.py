@@ -153,11 +153,40 @@ def test_bad_arguments_are_clean_errors(tmp_path):
 def test_capture_point_is_at_eye_height_and_clear_of_surfaces():
     from roomlight.synth.rooms import capture_clearance, generate_room
 
-    for seed in range(12):
+    for seed in range(40):
         room = generate_room(seed)
         assert 0.9 <= room.capture[1] <= 1.8
-        assert 2.3 <= room.height <= 4.0
+        if room.shell == "large":
+            assert 3.5 <= room.height <= 8.0
+        else:
+            assert 2.3 <= room.height <= 4.0
         assert capture_clearance(room) >= 0.4, seed
+
+
+def test_generator_covers_large_spaces_and_light_colours():
+    """Large spaces (halls, warehouses: >= 9 m sides, 3.5-8 m ceilings) make up ~15 % of rooms,
+    and artificial light colours spread over 2700-6500 K rather than a few fixed values."""
+    from roomlight.synth.color import light_rgb
+    from roomlight.synth.rooms import generate_room
+
+    rooms = [generate_room(seed) for seed in range(200)]
+    large = [r for r in rooms if r.shell == "large"]
+    assert 0.08 <= len(large) / len(rooms) <= 0.25
+    for r in large:
+        x0, z0, x1, z1 = r.cells[0]
+        assert min(x1 - x0, z1 - z0) >= 9.0 and r.room_type == "large"
+    assert max(r.height for r in large) > 6.0
+    # Blue/red ratio of the ceiling lights: 2700 K and 6500 K bound it; many distinct values.
+    lo, hi = (light_rgb(k, 1.0)[2] / light_rgb(k, 1.0)[0] for k in (2700, 6500))
+    ratios = set()
+    for r in rooms:
+        for name in ("panel", "downlight", "fixture"):
+            m = r.materials.get(name)
+            if m is not None and m.emission is not None and max(m.emission) > 0:
+                ratios.add(round(m.emission[2] / m.emission[0], 4))
+    assert len(ratios) > 30
+    assert min(ratios) >= lo - 1e-6 and max(ratios) <= hi + 1e-6
+    assert min(ratios) < lo + 0.1 * (hi - lo) and max(ratios) > hi - 0.1 * (hi - lo)
 
 
 # -- generator, scene builder and window portals (roomlight.synth internals) ---------------------
@@ -289,7 +318,7 @@ def test_every_generated_room_has_a_lit_source_and_a_clear_capture_point():
     for seed in range(150):
         room = generate_room(seed)
         daylight = bool(room.windows) and room.sky.kind in ("clear", "overcast", "dusk")
-        ceiling_on = any(lt.on and lt.kind in ("panel", "downlight", "central", "pendants") for lt in room.lights)
+        ceiling_on = any(lt.on and lt.kind in ("panel", "downlight", "central", "pendants", "highbay") for lt in room.lights)
         assert daylight or ceiling_on, seed
         assert capture_clearance(room) >= 0.4, seed
         seen.add(json.dumps(room.to_dict(full=False), sort_keys=True))

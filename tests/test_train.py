@@ -103,6 +103,25 @@ def test_resume_equals_uninterrupted_run(toy8, tmp_path):
     assert again.step == 8
 
 
+def test_time_budget_stops_with_a_checkpoint_and_the_run_continues_exactly(toy8, tmp_path):
+    """A wall-clock budget (used to compare recipes at equal CPU cost) stops after the step that
+    crosses it, checkpointed and validated, without changing the schedule."""
+    cfg = tiny(max_steps=6, val_fraction=0.0)
+    straight = run(cfg, toy8, tmp_path / "straight")
+    t = Trainer(cfg, toy8, tmp_path / "budget", device="cpu", note=lambda m: None)
+    summary = t.fit(time_budget_s=1e-9)  # already past after the first step
+    t.close()
+    assert summary["step"] == 1 and summary["total_steps"] == 6
+    assert latest_checkpoint(tmp_path / "budget").name == "step-00000001"
+    events = [json.loads(x)["event"] for x in (tmp_path / "budget" / "log.jsonl").read_text().splitlines()]
+    assert "val_on_train" in events or "val" in events
+    resumed = run(cfg, toy8, tmp_path / "budget")
+    assert resumed.step == 6
+    a, b = params(straight.model), params(resumed.model)
+    for k in a:
+        torch.testing.assert_close(b[k], a[k], rtol=1e-6, atol=1e-7, msg=k)
+
+
 def test_same_seed_same_weights_other_seed_other_weights(toy8, tmp_path):
     cfg = tiny(max_steps=3, val_fraction=0.0)
     a = params(run(cfg, toy8, tmp_path / "a").model)

@@ -43,7 +43,7 @@ def _shard(text: str) -> tuple[int, int]:
 def command(n, out_dir, res, spp, seed0, shard, workers, nadir_cap, denoise, no_summary):
     """Render N procedural rooms into OUT as panorama EXRs (R,G,B + Z depth in metres).
 
-    Each seed is a random room (box, L-shaped or alcove; furniture; doors; windows with sky and
+    Each seed is a random room (box, L-shaped, alcove or a large hall; furniture; doors; windows with sky and
     sun, ceiling lights, lamps, screens) path-traced from its capture point with Mitsuba.
     Samples go to OUT/train, OUT/val and OUT/test by seed range (80/10/10 %). Re-running the
     same command skips finished samples. Also writes OUT/stats.json and OUT/contact_sheet.png.

@@ -48,9 +48,14 @@ def parse_overrides(items) -> dict:
 @click.option("--device", type=click.Choice(["cpu", "cuda"]), default=None, help="Default: cuda when available.")
 @click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
               help="Override any TrainConfig field (docs/training.md), e.g. --set aug_tilt_deg=0 --set loss.peak=0.")
+@click.option("--time-budget", "time_budget", type=click.FloatRange(min=0, min_open=True), default=None,
+              metavar="MINUTES", help="Stop after this many minutes of training (validation and a checkpoint "
+              "follow); the same command continues later. The schedule is unchanged.")
+@click.option("--until-step", type=click.IntRange(min=1), default=None,
+              help="Stop at this step (checkpointed); the same command continues later.")
 @click.option("--print-config", is_flag=True, help="Print the resolved configuration as JSON and exit.")
 def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, num_workers, no_cache, device,
-            sets, print_config):
+            sets, time_budget, until_step, print_config):
     """Train the illumination prior on panoramas in --data, writing the run to --out.
 
     Interrupting (Ctrl-C) saves a checkpoint; running the same command again continues exactly
@@ -73,7 +78,7 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
         return
     trainer = Trainer(cfg, data_dir, run_dir, device=device)
     try:
-        summary = trainer.fit()
+        summary = trainer.fit(until=until_step, time_budget_s=None if time_budget is None else 60.0 * time_budget)
     except KeyboardInterrupt:
         raise SystemExit(130) from None
     finally:

@@ -74,12 +74,21 @@ def ceiling_lights(rng, cells, height: float, on: bool, capture, tables=()) -> t
     Furniture — when there are any). Pendants keep >= 0.5 m horizontally from ``capture``
     or hang >= 0.4 m above it.
     """
-    style = str(rng.choice(["panels", "downlights", "central", "pendants"], p=[0.3, 0.35, 0.2, 0.15]))
-    kelvin = float(rng.choice([2700, 3000, 3500, 4000, 5000, 6500]))
+    # Tall spaces (halls, warehouses) use fewer, stronger fixtures; ``tall`` scales spacing and
+    # flux so the illuminance on the floor stays in the range of ordinary rooms (flux ~ distance^2).
+    tall = max(1.0, height / 2.8)
+    if tall > 1.3:
+        style = str(rng.choice(["panels", "downlights", "highbay"], p=[0.3, 0.2, 0.5]))
+    else:
+        style = str(rng.choice(["panels", "downlights", "central", "pendants"], p=[0.3, 0.35, 0.2, 0.15]))
+    # White LEDs and lamps span warm (2700 K) to daylight (6500 K); warm tones are the most common.
+    kelvin = float(rng.uniform(2700, 3500) if rng.random() < 0.5 else rng.uniform(3500, 6500))
     items, mats, lights = [], {}, []
+    if style == "highbay":
+        return _highbay(rng, cells, height, on, capture, kelvin)
     if style == "panels":
         pw, pd = [(0.6, 0.6), (1.2, 0.3), (1.2, 0.6)][int(rng.integers(3))]
-        spacing = float(rng.uniform(1.8, 3.0))
+        spacing = float(rng.uniform(1.8, 3.0)) * tall
         lum = float(rng.uniform(1000, 3000))
         parts, area = [], 0.0
         for c in cells:
@@ -94,9 +103,9 @@ def ceiling_lights(rng, cells, height: float, on: bool, capture, tables=()) -> t
                              else _off("panel", (0.8, 0.8, 0.8)))
             lights.append(Light("panel", "panel", (0.0, height, 0.0), math.pi * area * lum if on else 0.0, on))
     elif style == "downlights":
-        r = float(rng.uniform(0.04, 0.08))
-        spacing = float(rng.uniform(1.0, 2.0))
-        flux = float(rng.uniform(400, 1200))
+        r = float(rng.uniform(0.04, 0.08)) * math.sqrt(tall)
+        spacing = float(rng.uniform(1.0, 2.0)) * tall
+        flux = float(rng.uniform(400, 1200)) * tall * tall
         parts = []
         for c in cells:
             for x, z in _grid(c, spacing):
@@ -137,6 +146,30 @@ def ceiling_lights(rng, cells, height: float, on: bool, capture, tables=()) -> t
     return items, mats, lights
 
 
+def _highbay(rng, cells, height: float, on: bool, capture, kelvin: float) -> tuple[list, dict, list]:
+    """High-bay pendants of a large space: a grid (4-9 m) of wide cylinders hung 0.3-1.5 m below
+    the ceiling, 6-25 klm each, kept >= 1 m horizontally from the capture point."""
+    r = float(rng.uniform(0.2, 0.35))
+    h = float(rng.uniform(0.1, 0.25))
+    drop = float(rng.uniform(0.3, 1.5))
+    spacing = float(rng.uniform(4.0, 9.0))
+    flux = float(rng.uniform(6000, 25000))
+    parts, n = [], 0
+    bottom = height - drop - h
+    for c in cells:
+        for x, z in _grid(c, spacing):
+            if math.hypot(x - capture[0], z - capture[2]) < r + 1.0:
+                continue
+            parts.append(Cylinder((x, bottom + h, z), 0.01, height - bottom - h, "black", "none"))
+            parts.append(Cylinder((x, bottom, z), r, h, "fixture", "both"))
+            n += 1
+    area = 2 * math.pi * r * h + 2 * math.pi * r * r
+    mats = {"fixture": _emissive("fixture", flux, area, kelvin) if on else _off("fixture")}
+    items = [Furniture("highbay", (0, bottom, 0), (0, height, 0), parts)] if parts else []
+    lights = [Light("highbay", "fixture", (0.0, height, 0.0), flux * n if on else 0.0, on)] if parts else []
+    return items, mats if parts else {}, lights
+
+
 def fixture_materials(rng, fixtures: list[Fixture], p_lamp_on: float, p_screen_on: float) -> tuple[dict, list]:
     """Materials and :class:`Light` records for lamp shades and screens placed with furniture."""
     mats, lights = {}, []
@@ -146,7 +179,7 @@ def fixture_materials(rng, fixtures: list[Fixture], p_lamp_on: float, p_screen_o
         if fx.kind == "lamp":
             on = rng.random() < p_lamp_on
             flux = float(rng.uniform(300, 1200))
-            kelvin = float(rng.uniform(2400, 3200))
+            kelvin = float(rng.uniform(2400, 3500) if rng.random() < 0.75 else rng.uniform(3500, 6500))
             mats[fx.material] = (_emissive(fx.material, flux, fx.area, kelvin) if on
                                  else _off(fx.material, tuple(float(v) for v in rng.uniform(0.4, 0.85, 3))))
             lights.append(Light("lamp", fx.material, fx.center, flux if on else 0.0, on))

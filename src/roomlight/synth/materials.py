@@ -13,7 +13,7 @@ from roomlight.synth.color import hsv_albedo
 from roomlight.synth.spec import Material
 from roomlight.synth.textures import make_texture
 
-__all__ = ["BOOK_MATERIALS", "CANVAS_MATERIALS", "bsdf_dict", "emission_texture", "room_palette"]
+__all__ = ["BOOK_MATERIALS", "CANVAS_MATERIALS", "bsdf_dict", "concrete_floor", "emission_texture", "room_palette"]
 
 BOOK_MATERIALS = tuple(f"book_{i}" for i in range(5))
 CANVAS_MATERIALS = tuple(f"canvas_{i}" for i in range(3))
@@ -66,6 +66,15 @@ def _floor(rng, name: str) -> Material:
     alb = hsv_albedo(0.1, rng.uniform(0.0, 0.08), rng.uniform(0.4, 0.65))
     tex = {"pattern": "noise", "seed": _seed(rng), "amplitude": float(rng.uniform(0.08, 0.2)), "tile": 2.0}
     return Material(name, "plastic", alb, float(rng.uniform(0.2, 0.45)), tex)
+
+
+def concrete_floor(rng, name: str) -> Material:
+    """Concrete, epoxy or polished stone: grey to beige, 0.2-0.55 albedo, mottled, from matte
+    (alpha 0.5) to polished (0.05)."""
+    alb = hsv_albedo(rng.uniform(0.05, 0.15), rng.uniform(0.0, 0.15), rng.uniform(0.35, 0.75))
+    tex = {"pattern": "noise", "seed": _seed(rng), "amplitude": float(rng.uniform(0.1, 0.3)),
+           "beta": float(rng.uniform(1.0, 2.0)), "tile": float(rng.uniform(1.5, 4.0))}
+    return Material(name, "plastic", alb, float(rng.uniform(0.05, 0.5)), tex)
 
 
 def _wood(rng, name: str, tile: float = 0.8) -> Material:

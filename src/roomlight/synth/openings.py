@@ -82,14 +82,23 @@ def _slot(rng, w: WallSeg, width: float, y0: float, y1: float, margin: float = 0
 
 def _window(rng, shell: Shell, w: WallSeg, ops: Openings) -> bool:
     h = shell.height
-    if rng.random() < 0.15:  # floor-to-ceiling glazing
+    # Window sizes grow with the room: small punched windows up to curtain walls. In a tall
+    # room a window may also be a clerestory band high on the wall (light from above the eye).
+    tall = h > 3.4
+    u = rng.random()
+    if u < 0.15:  # floor-to-ceiling glazing
         y0, y1 = 0.05, h - float(rng.uniform(0.05, 0.35))
+    elif tall and u < 0.35:  # clerestory
+        y0 = float(rng.uniform(0.5, 0.75)) * h
+        y1 = min(h - float(rng.uniform(0.1, 0.4)), y0 + float(rng.uniform(0.6, 2.0)))
     else:
         y0 = float(rng.uniform(0.4, 1.0))
-        y1 = min(h - float(rng.uniform(0.1, 0.4)), y0 + float(rng.uniform(1.0, 2.0)))
+        span_hi = max(2.0, 0.6 * h) if tall else 2.0
+        y1 = min(h - float(rng.uniform(0.1, 0.4)), y0 + float(rng.uniform(0.8, span_hi)))
     if y1 - y0 < 0.5:
         return False
-    width = float(rng.uniform(0.6, min(2.8, 0.8 * w.length)))
+    max_width = 2.8 if not tall else min(8.0, 2.8 * h / 3.0)
+    width = float(rng.uniform(0.5, max(0.6, min(max_width, 0.8 * w.length))))
     slot = _slot(rng, w, width, y0, y1)
     if slot is None:
         return False

@@ -2,7 +2,9 @@
 
 ``generate_room(seed)`` is deterministic: the same seed (and :data:`GENERATOR_VERSION`) always
 gives the same :class:`~roomlight.synth.spec.Room`. Room types (probability): living 0.3,
-bedroom 0.25, office 0.2, kitchen 0.15, hall 0.1, each with its own furnishing program.
+bedroom 0.25, office 0.2, kitchen 0.15, hall 0.1, each with its own furnishing program; large
+spaces (the ``large`` shell) get the ``large`` program (lobby, open-plan office, workshop or
+warehouse clutter, scaled with the floor area).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from roomlight.synth.lights import (
     space_lights,
     window_count,
 )
-from roomlight.synth.materials import CANVAS_MATERIALS, room_palette
+from roomlight.synth.materials import CANVAS_MATERIALS, concrete_floor, room_palette
 from roomlight.synth.openings import place_openings
 from roomlight.synth.shell import (
     floor_ceiling_quads,
@@ -143,7 +145,37 @@ def _hall(rng, lay: Layout, names, height):
         lay.on_top(rng, fu.table_lamp(rng, names("shade")))
 
 
-_PROGRAMS = {"living": _living, "bedroom": _bedroom, "office": _office, "kitchen": _kitchen, "hall": _hall}
+def _large(rng, lay: Layout, names, height):
+    """Clutter of a large space, by kind: lobby (seating islands, plants), open-plan office
+    (desk clusters), workshop (benches, shelving) or warehouse (rows of tall racks).
+    The number of pieces grows with the floor area (about one per 8-15 m^2)."""
+    area = sum((c[2] - c[0]) * (c[3] - c[1]) for c in lay.cells)
+    kind = str(rng.choice(["lobby", "open_office", "workshop", "warehouse"]))
+    n = int(area / float(rng.uniform(8.0, 15.0)))
+    shelf_h = min(height - 0.1, float(rng.uniform(2.0, 3.5)))
+    for _ in range(n):
+        u = rng.random()
+        if kind == "lobby":
+            piece = (fu.sofa(rng) if u < 0.3 else fu.armchair(rng) if u < 0.5 else fu.plant(rng) if u < 0.75
+                     else fu.table(rng, "coffee"))
+        elif kind == "open_office":
+            piece = (fu.desk(rng, names("screen") if rng.random() < 0.7 else None) if u < 0.55
+                     else fu.chair(rng, "black") if u < 0.75 else fu.plant(rng) if u < 0.85 else fu.cabinet(rng, 1.3))
+        elif kind == "workshop":
+            piece = (fu.table(rng, "dining", "metal") if u < 0.4 else fu.cabinet(rng, shelf_h, tall=True, mat="metal")
+                     if u < 0.7 else fu.bookshelf(rng, shelf_h, "metal"))
+        else:
+            piece = fu.bookshelf(rng, shelf_h, "metal") if u < 0.6 else fu.cabinet(rng, 1.6, mat="wood")
+        if rng.random() < 0.35:
+            lay.on_wall(rng, piece)
+        else:
+            lay.free(rng, piece)
+    if rng.random() < 0.5:
+        lay.free(rng, fu.rug(rng))
+
+
+_PROGRAMS = {"living": _living, "bedroom": _bedroom, "office": _office, "kitchen": _kitchen, "hall": _hall,
+             "large": _large}
 
 
 def _extent_along(f) -> float:
@@ -211,6 +243,10 @@ def generate_room(seed: int) -> Room:
     names_t = list(types)
     probs = np.array(list(types.values()))
     room_type = names_t[int(rng.choice(len(names_t), p=probs / probs.sum()))]
+    if shell.kind == "large":
+        room_type = "large"
+        if rng.random() < 0.5:  # concrete, epoxy or polished stone floors of big spaces
+            materials["floor"] = concrete_floor(rng, "floor")
     names = _Names()
     _PROGRAMS[room_type](rng, layout, names, shell.height)
     for _ in range(int(rng.integers(0, 4))):

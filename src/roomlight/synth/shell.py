@@ -144,30 +144,38 @@ def _size(rng: np.random.Generator, mean: float, lo: float, hi: float) -> float:
 
 
 def sample_shell(rng: np.random.Generator) -> Shell:
-    """A random floor plan: box (50 %), L-shape (25 %) or box with an alcove (25 %).
+    """A random floor plan: box (42 %), L-shape (22 %), box with an alcove (21 %) or a large
+    space (15 %: hall, lobby, open-plan office, workshop, warehouse).
 
-    Sides 2.2-12 m (median ~4-6 m), ceiling 2.3-4 m (mostly 2.4-3 m), walls 0.12-0.35 m thick.
-    The first cell is always the main (largest) one.
+    Ordinary rooms: sides 2.2-12 m (median ~4-6 m), ceiling 2.3-4 m (mostly 2.4-3 m). Large
+    spaces: sides 9-30 m (median ~14 m), ceiling 3.5-8 m, log-uniform so that lobbies and
+    warehouses are as likely as halls. Walls are 0.12-0.35 m thick. The first cell is always
+    the main (largest) one.
     """
     u = rng.random()
     height = float(np.clip(rng.normal(2.75, 0.35), 2.3, 4.0))
     thickness = float(rng.uniform(0.12, 0.35))
-    if u < 0.5:
+    if u < 0.42:
         kind = "box"
         x, z = _size(rng, 4.5, 2.2, 12.0), _size(rng, 4.0, 2.2, 12.0)
         cells = [(0.0, 0.0, x, z)]
-    elif u < 0.75:
+    elif u < 0.64:
         kind = "L"
         x, z = _size(rng, 6.5, 4.0, 12.0), _size(rng, 6.0, 4.0, 12.0)
         nx, nz = x * rng.uniform(0.3, 0.55), z * rng.uniform(0.3, 0.55)
         cells = [(0.0, 0.0, x, z - nz), (0.0, z - nz, x - nx, z)]
-    else:
+    elif u < 0.85:
         kind = "alcove"
         x, z = _size(rng, 4.5, 2.8, 12.0), _size(rng, 4.0, 2.4, 12.0)
         w = float(rng.uniform(1.0, min(3.0, x - 0.8)))
         d = float(rng.uniform(0.6, 1.6))
         x0 = float(rng.uniform(0.4, x - w - 0.4))
         cells = [(0.0, 0.0, x, z), (x0, z, x0 + w, z + d)]
+    else:
+        kind = "large"
+        height = float(math.exp(rng.uniform(math.log(3.5), math.log(8.0))))
+        x, z = _size(rng, 15.0, 9.0, 30.0), _size(rng, 13.0, 9.0, 30.0)
+        cells = [(0.0, 0.0, x, z)]
     cells = [tuple(round(float(v), 4) for v in c) for c in cells]
     return Shell(kind, cells, round(height, 4), round(thickness, 4), plan_walls(cells))
 

@@ -79,8 +79,8 @@ def sample_sky(rng: np.random.Generator, kind: str, sun_radius_deg: float = 0.5,
     ``sun_dir`` (unit vector towards the sun, above the horizon) fixes the sun's direction of
     a clear sky instead of drawing it (used to put the sun in view of a window).
 
-    Luminances (nits): clear zenith 1.5-5 k with a 1.3-2.5x brighter horizon and a sun of
-    30-100 klx; overcast zenith 0.8-6 k; dusk 10-400; night 0.005-1 with orange light pollution.
+    Luminances (nits): clear zenith 0.8-8 k with a 1.3-2.5x brighter horizon and a sun of
+    10-100 klx (clear to hazy); overcast zenith 0.3-10 k; dusk 10-400; night 0.005-1 with orange light pollution.
     """
     sun = None
     sun_dir = (0.0, 1.0, 0.0)
@@ -88,7 +88,7 @@ def sample_sky(rng: np.random.Generator, kind: str, sun_radius_deg: float = 0.5,
     glow_width = 0.3
     e_sun = 0.0
     if kind == "clear":
-        lz = rng.uniform(1500.0, 5000.0)
+        lz = math.exp(rng.uniform(math.log(800.0), math.log(8000.0)))
         zenith = light_rgb(rng.uniform(12000, 25000), lz)
         horizon = light_rgb(rng.uniform(6500, 9000), lz * rng.uniform(1.3, 2.5))
         exponent = rng.uniform(0.3, 0.6)
@@ -99,13 +99,14 @@ def sample_sky(rng: np.random.Generator, kind: str, sun_radius_deg: float = 0.5,
             elev, az = math.asin(float(v[1])), math.atan2(float(v[0]), -float(v[2]))
         sun_dir = (math.sin(az) * math.cos(elev), math.sin(elev), -math.cos(az) * math.cos(elev))
         air_mass = 1.0 / max(math.sin(elev), 0.05)
-        e_sun = 1.2e5 * 0.7 ** (air_mass ** 0.678)
+        # Meinel's clear-air model times a haze factor: from crisp (1.0) to hazy (0.35) days.
+        e_sun = 1.2e5 * 0.7 ** (air_mass ** 0.678) * rng.uniform(0.35, 1.0)
         kelvin = 4000.0 + 1800.0 * math.sqrt(math.sin(elev))
         sun = light_rgb(kelvin, e_sun / sun_solid_angle(sun_radius_deg))
         glow = light_rgb(5500, lz * rng.uniform(2.0, 8.0))
         glow_width = rng.uniform(0.12, 0.3)
     elif kind == "overcast":
-        lz = math.exp(rng.uniform(math.log(800.0), math.log(6000.0)))
+        lz = math.exp(rng.uniform(math.log(300.0), math.log(10000.0)))
         k = rng.uniform(6500, 7500)
         zenith = light_rgb(k, lz)
         horizon = light_rgb(k, lz / 3.0)

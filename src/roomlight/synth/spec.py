@@ -35,8 +35,10 @@ __all__ = [
 
 #: Bumped whenever the same seed would produce a different room (2: furniture footprints include
 #: every part, so plant foliage keeps 0.4 m from the capture point; the sun is put in view of a
-#: window in 40 % of sunny rooms).
-GENERATOR_VERSION = "2"
+#: window in 40 % of sunny rooms; 3: large spaces with high ceilings and high-bay lights, larger
+#: and clerestory windows, continuous 2700-6500 K light colours, wider sky and sun strengths,
+#: concrete floors).
+GENERATOR_VERSION = "3"
 
 Vec3 = tuple[float, float, float]
 

@@ -177,6 +177,7 @@ TRAIN_PRESETS: dict[str, TrainConfig] = {
     "default": TrainConfig(),
     "small": TrainConfig(model="small", image_every=500, ckpt_every=500),
     "compact": TrainConfig(model="compact", image_every=500, ckpt_every=500),
+    "lite": TrainConfig(model="lite", image_every=500, ckpt_every=250),
     "tiny": TrainConfig(
         model="tiny", batch_size=4, epochs=100, lr=2e-3, min_lr=1e-4, warmup_steps=10,
         loss={**LossConfig().to_dict(), "kl_warmup_steps": 100, "grad_levels": 3},

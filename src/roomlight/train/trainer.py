@@ -379,8 +379,13 @@ class Trainer:
                 self.note(f"skipping {name}: {why}")
                 self.log.event("skipped", self.step, file=name, reason=why)
 
-    def fit(self, until: int | None = None) -> dict:
+    def fit(self, until: int | None = None, time_budget_s: float | None = None) -> dict:
         """Train up to step ``until`` (default: the end of the schedule); returns a summary.
+
+        ``time_budget_s`` stops earlier, after the first step that ends past that many seconds
+        of wall time (validation, images and a checkpoint follow as at any stop): the way to
+        give several recipes the same CPU budget, or to train in sittings. The schedule is not
+        changed by it, so the run continues exactly when called again.
 
         Writes a checkpoint at the end, every ``ckpt_every`` steps, and on Ctrl-C (then re-raises
         ``KeyboardInterrupt``): re-running continues from it.
@@ -389,6 +394,7 @@ class Trainer:
 
         cfg, main = self.cfg, self.dist.is_main
         stop = min(until or self.total_steps, self.total_steps)
+        deadline = None if time_budget_s is None else time.perf_counter() + float(time_budget_s)
         if self.step >= stop:
             self.note(f"{self.run_dir}: already at step {self.step} of {self.total_steps}; nothing to do")
             return self.summary()
@@ -415,6 +421,9 @@ class Trainer:
                     window[k] = window.get(k, 0.0) + v
                 window["n"] = window.get("n", 0) + 1
                 bar.update(1)
+                # Every rank must stop at the same step: one rank past the deadline stops all.
+                if deadline is not None and broadcast_flag(time.perf_counter() >= deadline, self.dist):
+                    stop = self.step
                 if self.step % cfg.log_every == 0 or self.step == stop:
                     dt = time.perf_counter() - t0
                     means = {k: v / window["n"] for k, v in window.items() if k != "n"}
