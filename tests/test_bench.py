@@ -403,6 +403,48 @@ def test_report_tables_hand_computed(tmp_path):
     assert "Table 2" in paths["markdown"].read_text() and paths["html"].is_file()
 
 
+def test_paired_differences_hand_computed(tmp_path):
+    """Per-scene differences prior - baseline: pairing by scene, win counts with the metric's
+    direction, scenes missing on either side left out; the report carries them."""
+    from roomlight.bench.report import write_report
+
+    _fake_results(tmp_path, [
+        ("r1", "diffuse", "prior", 20.0, 0.1, 1.0), ("r2", "diffuse", "prior", 30.0, 0.3, 3.0),
+        ("r3", "diffuse", "prior", 12.0, 0.9, 5.0),
+        ("r1", "diffuse", "direct-envmap", 10.0, 0.5, 2.0), ("r2", "diffuse", "direct-envmap", 10.0, 0.7, 1.0),
+        ("r1", "diffuse", "oracle", 40.0, 0.0, 0.0),  # never a baseline
+    ])
+    paths = write_report(tmp_path, figures=False, progress=False)
+    summary = json.loads(paths["json"].read_text())
+    paired = summary["paired"]["eval"]
+    assert set(paired) == {"direct-envmap"}
+    psnr = paired["direct-envmap"]["diffuse"]["psnr_ldr"]
+    assert psnr["n"] == 2 and psnr["mean"] == pytest.approx(15.0) and psnr["wins"] == 2  # +10, +20
+    lo, hi = psnr["ci95"]
+    assert 10.0 <= lo <= 15.0 <= hi <= 20.0
+    rmse = paired["direct-envmap"]["diffuse"]["rmse_hdr"]
+    assert rmse["mean"] == pytest.approx(-0.4) and rmse["wins"] == 2 and rmse["better"] == "lower"
+    ang = paired["direct-envmap"]["diffuse"]["angular_error"]
+    assert ang["mean"] == pytest.approx(0.5) and ang["wins"] == 1  # -1 (win) and +2 (loss)
+    md = paths["markdown"].read_text()
+    assert "| direct-envmap | Δ PSNR LDR (dB, ↑) | +15.00 [" in md and "2/2 ✓" in md
+    assert "Paired differences" in paths["html"].read_text()
+
+
+def test_bootstrap_interval_matches_the_normal_approximation():
+    """For many scenes the percentile bootstrap of a mean approaches mean +- 1.96 s / sqrt(n)
+    (s: the population standard deviation, which is what the bootstrap resamples)."""
+    from roomlight.bench.paired import bootstrap_mean_interval
+
+    x = np.random.default_rng(3).normal(1.0, 2.0, 400)
+    lo, hi = bootstrap_mean_interval(x)
+    half = 1.96 * x.std() / np.sqrt(x.size)
+    assert lo == pytest.approx(x.mean() - half, abs=0.05 * half)
+    assert hi == pytest.approx(x.mean() + half, abs=0.05 * half)
+    assert bootstrap_mean_interval([2.5]) == (2.5, 2.5)
+    assert bootstrap_mean_interval(x) == (lo, hi)  # seeded
+
+
 def test_report_without_results_fails_cleanly(tmp_path):
     from roomlight.bench.report import write_report
 

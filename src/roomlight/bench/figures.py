@@ -166,7 +166,8 @@ def _md_table_to_html(md: str) -> str:
 
 def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
     """``index.html``: both tables, links to the CSV/JSON/Markdown files and every scene figure."""
-    from roomlight.bench.report import markdown_table
+    from roomlight.bench.paired import paired_differences, paired_markdown
+    from roomlight.bench.report import MATERIAL_ORDER, _ordered, markdown_table
 
     out = Path(out_dir)
     parts = ["<!doctype html><html><head><meta charset='utf-8'><title>roomlight benchmark</title>",
@@ -178,6 +179,11 @@ def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
               "<a href='table_input.csv'>table_input.csv</a> · <a href='cases.csv'>cases.csv</a> · "
               "<a href='summary.json'>summary.json</a></p>"),
              "<h2>Evaluation view (probe) — Table 2</h2>", _md_table_to_html(markdown_table(records, "eval")),
+             "<h2>Paired differences: the prior against each baseline (evaluation view)</h2>",
+             _md_table_to_html(paired_markdown(paired_differences(records, "prior", "eval"), "prior",
+                                               _ordered({r["material"] for r in records}, MATERIAL_ORDER))),
+             ("<p>Cells: mean per-scene difference prior − baseline [95 % bootstrap interval of the mean] and "
+              "the scenes the prior wins; ✓ interval entirely on the good side, ✗ entirely on the bad side.</p>"),
              "<h2>Input view (fitted objects)</h2>", _md_table_to_html(markdown_table(records, "input")),
              "<h2>Scenes</h2>"]
     for sid, p in sorted(figures.items()):

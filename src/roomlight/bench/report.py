@@ -11,7 +11,9 @@ Files written to ``OUT`` (default ``RES/report``):
 - ``table.csv``     the evaluation-view table, wide: ``<metric>_<material>_{mean,std,n}``
 - ``table_input.csv`` the same for the input view
 - ``cases.csv``     one row per case and view with every metric (long format)
-- ``summary.json``  ``{"views": {view: {method: {material: {metric: {mean, std, n}}}}}, ...}``
+- ``summary.json``  ``{"views": {view: {method: {material: {metric: {mean, std, n}}}}},
+  "paired": {view: {baseline: {material: {metric: {mean, ci95, wins, n}}}}}, ...}`` (paired:
+  per-scene differences prior - baseline, :mod:`roomlight.bench.paired`)
 - ``figures/*.png`` and ``index.html`` (see :mod:`roomlight.bench.figures`)
 """
 
@@ -26,6 +28,7 @@ import numpy as np
 
 from roomlight.bench.errors import BenchError
 from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
+from roomlight.bench.paired import paired_differences, paired_markdown
 from roomlight.bench.runner import RESULT
 
 __all__ = ["METRIC_LABELS", "METHOD_ORDER", "collect_results", "collect_failures", "summarize",
@@ -221,12 +224,19 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
                "methods": _ordered({r["method"] for r in records}, METHOD_ORDER),
                "materials": _ordered({r["material"] for r in records}, MATERIAL_ORDER),
                "timing": timing, "failed": [f.get("case", "?") for f in failures],
-               "std": "population standard deviation over scenes (ddof = 0)"}
+               "std": "population standard deviation over scenes (ddof = 0)",
+               "paired": {v: paired_differences(records, "prior", v) for v in VIEWS},
+               "paired_note": ("per-scene difference prior - baseline: mean, 95 % percentile-bootstrap "
+                               "interval of the mean, scenes won by the prior")}
     paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
     md = ["# Benchmark results", "",
           f"{len(records)} cases, {summary['scenes']} scenes. Cells: mean ± std over scenes; best in bold.", "",
           "## Evaluation view (probe sphere) — paper Table 2", "", markdown_table(records, "eval"),
+          "## Paired differences, evaluation view: the prior against each baseline", "",
+          paired_markdown(summary["paired"]["eval"], "prior", summary["materials"]),
           "## Input view (fitted objects) — supplementary fitted-view table", "", markdown_table(records, "input"),
+          "## Paired differences, input view", "",
+          paired_markdown(summary["paired"]["input"], "prior", summary["materials"]),
           "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
     for m in _ordered(timing, METHOD_ORDER):
         md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")
