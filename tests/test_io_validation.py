@@ -223,6 +223,23 @@ def test_tonemap_gamma_values_and_torch_layout(rng):
     np.testing.assert_array_equal(tonemap_gamma(t[None]), tonemap_gamma(x))
 
 
+def test_auto_exposure_maps_the_log_average_to_middle_grey():
+    from roomlight.io.preview import auto_exposure_stops
+
+    rad = np.zeros((2, 4, 3), np.float32)
+    rad[0, :2] = 2.0      # luminance 2 (grey)
+    rad[1, :2] = 8.0      # luminance 8
+    # zeros (background) are ignored: log-average of {2, 2, 8, 8} is 4
+    assert auto_exposure_stops(rad) == pytest.approx(np.log2(0.18 / 4.0))
+    mask = np.zeros((2, 4), bool)
+    mask[1] = True
+    assert auto_exposure_stops(rad, mask=mask) == pytest.approx(np.log2(0.18 / 8.0))
+    assert auto_exposure_stops(np.zeros((2, 4, 3))) == 0.0
+    # exposed this way, a uniform image displays at 0.18 ** (1 / 2.2)
+    img = tonemap_gamma(np.full((2, 4, 3), 5.0), auto_exposure_stops(np.full((2, 4, 3), 5.0)))
+    assert img[0, 0, 0] == round(255 * 0.18 ** (1 / 2.2))
+
+
 @pytest.mark.parametrize("white", [None, 3.0, 1e6, np.inf])
 def test_reinhard_extended_inverse_round_trip(rng, white):
     x = make_radiance(rng, 16, 32).astype(np.float64)

@@ -21,7 +21,7 @@ def parallax_figure(out_dir, rad, depth, res: int = 192, spp: int = 64) -> dict:
 
     from roomlight.emitter.export import export_emitter
     from roomlight.io import save_png, write_exr
-    from roomlight.io.preview import tonemap_gamma
+    from roomlight.io.preview import auto_exposure_stops, tonemap_gamma
     from roomlight.render.bundle import parse_probe, render_bundle
     from roomlight.render.camera import perspective_sensor
 
@@ -40,25 +40,30 @@ def parallax_figure(out_dir, rad, depth, res: int = 192, spp: int = 64) -> dict:
         img = render_bundle(out / kind, sensor, probes, spp=spp).numpy()
         renders[kind] = img
         write_exr(out / f"probes_{kind}.exr", {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]})
-        save_png(out / f"probes_{kind}.png", tonemap_gamma(img))
-    _comparison_png(out / "comparison.png", rad.numpy(), depth.numpy(), renders)
+    # One exposure for both renders (so they compare), set by the 2.5D render's auto-exposure.
+    stops = auto_exposure_stops(renders["mesh"])
+    for kind, img in renders.items():
+        save_png(out / f"probes_{kind}.png", tonemap_gamma(img, stops))
+    _comparison_png(out / "comparison.png", rad.numpy(), depth.numpy(), renders, stops)
     return {"mean_abs_difference_envmap_vs_mesh": float(np.abs(renders["envmap"] - renders["mesh"]).mean())}
 
 
-def _comparison_png(path, rad, depth, renders):
+def _comparison_png(path, rad, depth, renders, stops: float):
+    """The panorama (auto-exposed), its depth, the probes under both lights (exposed by
+    ``stops``) and their difference."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from roomlight.io.preview import colorize_depth, tonemap_gamma
+    from roomlight.io.preview import auto_exposure_stops, colorize_depth, tonemap_gamma
 
     fig = plt.figure(figsize=(12, 7.2), dpi=110)
     grid = fig.add_gridspec(2, 3, height_ratios=[1, 1.6])
     ax = fig.add_subplot(grid[0, 0:2])
-    ax.imshow(tonemap_gamma(rad))
-    ax.set_title("HDR radiance (tone-mapped)")
+    ax.imshow(tonemap_gamma(rad, auto_exposure_stops(rad)))
+    ax.set_title("HDR radiance (auto-exposed)")
     ax.axis("off")
     ax = fig.add_subplot(grid[0, 2])
     ax.imshow(colorize_depth(depth))
@@ -66,7 +71,7 @@ def _comparison_png(path, rad, depth, renders):
     ax.axis("off")
     for col, (kind, title) in enumerate([("mesh", "lit by the 2.5D area light"), ("envmap", "lit by an env map")]):
         ax = fig.add_subplot(grid[1, col])
-        ax.imshow(tonemap_gamma(renders[kind]))
+        ax.imshow(tonemap_gamma(renders[kind], stops))
         ax.set_title(title)
         ax.axis("off")
     ax = fig.add_subplot(grid[1, 2])

@@ -2,7 +2,7 @@
 
 Inputs are numpy arrays in channel-last layout ((H, W, 3) radiance, (H, W) depth) or torch
 tensors in channel-first layout ((3, H, W) / (1, 3, H, W), (H, W) / (1, H, W) / (1, 1, H, W)),
-following DESIGN.md §1. Outputs are numpy.
+following the project's conventions (docs/conventions.md). Outputs are numpy.
 
 The Reinhard operator here is the *extended* global operator of Reinhard et al. 2002
 ("Photographic tone reproduction for digital images", eq. 4) applied to luminance:
@@ -24,6 +24,7 @@ from roomlight.io.validate import as_numpy_image, as_numpy_map
 
 __all__ = [
     "tonemap_gamma",
+    "auto_exposure_stops",
     "reinhard_extended",
     "inverse_reinhard_extended",
     "colorize_depth",
@@ -52,6 +53,23 @@ def tonemap_gamma(radiance, exposure_stops: float = 0.0, gamma: float = 2.2) -> 
     # NaN -> 0 so that a broken pixel is visible as black rather than crashing the cast.
     x = np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=0.0)
     return _to_uint8(np.clip(x, 0.0, 1.0) ** (1.0 / gamma))
+
+
+def auto_exposure_stops(radiance, key: float = 0.18, mask=None) -> float:
+    """Exposure (stops) that maps the log-average luminance of ``radiance`` to ``key``.
+
+    A camera's auto-exposure: with ``tonemap_gamma(x, auto_exposure_stops(x))`` walls and
+    objects land around middle grey and only light sources clip. ``mask`` ((H, W) bool)
+    restricts the average to some pixels (e.g. the objects of a render); pixels of zero
+    luminance (background, black bodies) are left out so they do not drag the average down.
+    """
+    y = luminance(_radiance(radiance))
+    keep = np.isfinite(y) & (y > 0)
+    if mask is not None:
+        keep &= np.asarray(mask, bool)
+    if not keep.any():
+        return 0.0
+    return float(np.log2(key) - np.mean(np.log2(y[keep])))
 
 
 def reinhard_extended(radiance, white: float | None = None) -> np.ndarray:
