@@ -3,12 +3,14 @@
 - decode latency of the paper's model at 128 x 256, batch 1 and 32 (target batch 1 <= 120 ms
   with 2 CPU threads);
 - training throughput (panoramas / s) of full training steps (forward, the paper's loss,
-  backward, AdamW) at batch 32, for the default model and the small/tiny presets;
+  backward, AdamW) at batch 32, for every preset (``--presets``), and with ``--compare PRESET``
+  that preset eager, channels-last and compiled, timed alternately in one run;
 - peak memory of a training step at batch 32 (CPU: the process's peak resident set size, in a
   fresh subprocess, minus its size before the step; CUDA: torch.cuda.max_memory_allocated).
 
 Prints a Markdown table of medians (first runs excluded as warm-up).
 Run: .venv/bin/python benchmarks/bench_model.py [--threads 2] [--repeats 5] [--device cpu|cuda] [--decode-only]
+     [--presets default,small,compact,lite,tiny] [--compare lite]
 """
 
 from __future__ import annotations
@@ -106,13 +108,15 @@ def fake_batch(model, batch: int, device: str):
     return rad.to(device), dep.to(device)
 
 
-def train_step_fn(model, batch: int, device: str, amp: bool):
+def train_step_fn(model, batch: int, device: str, amp: bool, channels_last: bool = False):
     """A closure running one full training step (the Trainer's arithmetic, without data loading)."""
     from roomlight.data import augment_batch
     from roomlight.losses import vae_loss
 
     opt = torch.optim.AdamW(model.parameters(), lr=2e-4, betas=(0.9, 0.99), weight_decay=0.01)
     rad, dep = fake_batch(model, batch, device)
+    if channels_last:
+        rad, dep = rad.contiguous(memory_format=torch.channels_last), dep.contiguous(memory_format=torch.channels_last)
     aug = torch.Generator().manual_seed(0)
     gen = torch.Generator(device=device).manual_seed(0)
     model.train()
@@ -130,6 +134,41 @@ def train_step_fn(model, batch: int, device: str, amp: bool):
         opt.step()
 
     return step
+
+
+def compare_training_variants(preset: str, dev: str, repeats: int, sync) -> list[tuple]:
+    """Training-step time of one preset eager (the reference), with channels-last tensors, and
+    with ``torch.compile`` of the encoder and decoder (the Trainer's ``compile`` option): the
+    same maths, timed round-robin call by call in one run so a busy machine slows all alike.
+    Compilation happens in the warm-up calls and is reported separately."""
+    variants = {}
+    for name in ("eager", "channels_last", "compiled"):
+        m = make_model(preset, dev)
+        if name == "channels_last":
+            m = m.to(memory_format=torch.channels_last)
+        if name == "compiled":
+            m.encoder.compile()
+            m.decoder.compile()
+        variants[name] = train_step_fn(m, 32, dev, amp=dev == "cuda", channels_last=name == "channels_last")
+    t0 = time.perf_counter()
+    variants["compiled"]()
+    compile_s = time.perf_counter() - t0
+    times = {k: [] for k in variants}
+    for k in range(repeats + 1):
+        for name, step in variants.items():
+            t0 = time.perf_counter()
+            step()
+            sync()
+            if k:
+                times[name].append(time.perf_counter() - t0)
+    med = {k: statistics.median(v) for k, v in times.items()}
+    h, w = make_model(preset, "cpu").config.resolution
+    rows = [(f"{preset} {h}x{w} train step, eager (before)", med["eager"] * 1e3, "ms")]
+    for name in ("channels_last", "compiled"):
+        rows.append((f"{preset} {h}x{w} train step, {name.replace('_', '-')}", med[name] * 1e3, "ms"))
+        rows.append((f"  speed-up over eager, same run", med["eager"] / med[name], "x"))
+    rows.append((f"{preset} torch.compile time (first step)", compile_s, "s"))
+    return rows
 
 
 def current_rss() -> int:
@@ -160,26 +199,10 @@ def memory_child(preset: str, batch: int, threads: int) -> None:
     print(json.dumps({"before": before, "peak": after}))
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--train-repeats", type=int, default=3)
-    ap.add_argument("--device", default="cuda" if torch.cuda.is_available() else "cpu")
-    ap.add_argument("--decode-only", action="store_true", help="skip the training and memory rows")
-    ap.add_argument("--memory-child", nargs=3, metavar=("PRESET", "BATCH", "THREADS"), help=argparse.SUPPRESS)
-    args = ap.parse_args()
-    if args.memory_child:
-        memory_child(args.memory_child[0], int(args.memory_child[1]), int(args.memory_child[2]))
-        return
-    torch.set_num_threads(args.threads)
-    dev = args.device
-    cuda = dev == "cuda"
-    sync = torch.cuda.synchronize if cuda else (lambda: None)
+def decode_rows(model, args, dev: str, cuda: bool, sync) -> list[tuple]:
+    """Decode latency of the default model: batch 1 and 32, the literal blocks against the fused
+    ones (alternating call by call), bf16 autocast where the hardware has it, one thread."""
     rows = []
-
-    model = make_model("default", dev).eval()
-    params = sum(p.numel() for p in model.parameters())
     for b in (1, 32):
         z = torch.randn(b, model.config.latent_dim, device=dev)
         with torch.no_grad():
@@ -215,8 +238,41 @@ def main():
             t = median_time(lambda: model.decode(z), args.repeats)
         rows.append(("decode default 128x256, batch 1, 1 thread", t * 1e3, "ms"))
         torch.set_num_threads(args.threads)
+    return rows
 
-    for preset, batch in () if args.decode_only else (("default", 32), ("small", 32), ("tiny", 32)):
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--train-repeats", type=int, default=3)
+    ap.add_argument("--device", default="cuda" if torch.cuda.is_available() else "cpu")
+    ap.add_argument("--decode-only", action="store_true", help="skip the training and memory rows")
+    ap.add_argument("--train-only", action="store_true", help="skip the decode rows")
+    ap.add_argument("--presets", default="default,small,compact,lite,tiny",
+                    help="comma-separated presets whose training throughput is measured")
+    ap.add_argument("--compare", default="", metavar="PRESET",
+                    help="also time this preset's training step eagerly, channels-last and compiled, "
+                         "alternating call by call in one run")
+    ap.add_argument("--memory-child", nargs=3, metavar=("PRESET", "BATCH", "THREADS"), help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.memory_child:
+        memory_child(args.memory_child[0], int(args.memory_child[1]), int(args.memory_child[2]))
+        return
+    torch.set_num_threads(args.threads)
+    dev = args.device
+    cuda = dev == "cuda"
+    sync = torch.cuda.synchronize if cuda else (lambda: None)
+    rows = []
+
+    model = make_model("default", dev).eval()
+    params = sum(p.numel() for p in model.parameters())
+    if not args.train_only:
+        rows += decode_rows(model, args, dev, cuda, sync)
+
+    presets = tuple(p for p in args.presets.split(",") if p)
+    for preset in () if args.decode_only else presets:
+        batch = 32
         m = make_model(preset, dev)
         step = train_step_fn(m, batch, dev, amp=cuda)
         reps = args.train_repeats if preset == "default" else args.repeats
@@ -225,9 +281,11 @@ def main():
         rows.append((f"train step {preset} {h}x{w}, batch {batch}", t * 1e3, "ms"))
         rows.append((f"training throughput {preset} {h}x{w}", batch / t, "panoramas/s"))
         del m, step
+    if args.compare and not args.decode_only:
+        rows += compare_training_variants(args.compare, dev, args.repeats, sync)
 
-    if args.decode_only:
-        pass
+    if args.decode_only or "default" not in presets:
+        pass  # the memory rows are about the default model's training step
     elif cuda:
         m = make_model("default", dev)
         torch.cuda.reset_peak_memory_stats()

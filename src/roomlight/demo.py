@@ -37,7 +37,10 @@ class DemoConfig:
     spp: int = 8              #: samples per pixel per fitting step
     gt_spp: int = 128         #: samples per pixel of the ground-truth and evaluation renders
     material: str = "matte"   #: benchmark material (diffuse, matte or mirror)
-    seed: int = 0
+    #: Room seed. 400001 is outside the seeds the bundled prior was trained and validated on
+    #: (0-1499), so the demo shows the prior on a room it has never seen: a blue room lit by two
+    #: windows on one side.
+    seed: int = 400001
 
 
 def bundled_prior_path() -> Path | None:
