@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.metrics import to_ldr
+from roomlight.color import to_display
 
 __all__ = ["ERROR_RANGE", "scene_figure", "scene_figures", "write_index"]
 
@@ -86,7 +86,7 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
     FigureCanvasAgg(fig)
     grid = fig.add_gridspec(len(rows), 5, width_ratios=[1, 1, 1, 2, 2], wspace=0.05, hspace=0.25)
     titles = ["probe (eval view)", "probe |LDR error|", "input view", "radiance", "depth"]
-    gt_ldr = to_ldr(gt_eval)
+    gt_ldr = to_display(gt_eval)
     for r, (label, ev, inp, pano, text) in enumerate(rows):
         axes = [fig.add_subplot(grid[r, c]) for c in range(5)]
         for c, ax in enumerate(axes):
@@ -94,19 +94,19 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
             ax.set_yticks([])
             if r == 0:
                 ax.set_title(titles[c], fontsize=9)
-        axes[0].imshow(to_ldr(ev)[crop])
+        axes[0].imshow(to_display(ev)[crop])
         axes[0].set_ylabel(label, fontsize=9)
         if r == 0:
             axes[1].set_facecolor((0.25, 0.25, 0.25))
         else:
-            err = np.abs(to_ldr(ev) - gt_ldr).mean(-1)
+            err = np.abs(to_display(ev) - gt_ldr).mean(-1)
             err = np.ma.masked_where(~mask_eval, err)
             im = axes[1].imshow(err[crop], cmap=cmap, vmin=0.0, vmax=ERROR_RANGE)
             last_err = axes[1]
             axes[1].set_xlabel(text, fontsize=7)
-        axes[2].imshow(to_ldr(inp))
+        axes[2].imshow(to_display(inp))
         if pano is not None:
-            axes[3].imshow(to_ldr(pano.radiance))
+            axes[3].imshow(to_display(pano.radiance))
             if pano.depth is not None:
                 axes[4].imshow(colorize_depth(pano.depth, vmin, vmax, log=vmin is not None and vmin > 0))
             else:

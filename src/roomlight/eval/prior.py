@@ -21,7 +21,8 @@ import torch
 
 from roomlight.data.dataset import collate_panoramas
 from roomlight.eval.lpips import load_lpips
-from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim, to_ldr
+from roomlight.color import to_display_at_key
+from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim
 from roomlight.fit.latent import FitConfig, fit_latent
 
 __all__ = ["METRICS", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
@@ -47,8 +48,8 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
     Returns:
         name -> (B,) float64 tensor, names as in :data:`METRICS` (``lpips_ldr`` only with lpips_fn).
     """
-    ldr_t = to_ldr(radiance.float())
-    ldr_p = to_ldr(pred_radiance.float(), reference=radiance.float())
+    ldr_t = to_display_at_key(radiance.float())
+    ldr_p = to_display_at_key(pred_radiance.float(), reference=radiance.float())
     out = {"psnr_ldr": psnr(ldr_p, ldr_t).cpu(), "ssim_ldr": ssim(ldr_p, ldr_t).cpu(),
            "psnr_hdr": psnr_hdr(pred_radiance, radiance).cpu(),
            "peak_stops": peak_error_stops(pred_radiance, radiance).cpu(), "abs_rel": abs_rel(pred_depth, depth).cpu()}

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from roomlight.color import display_to_linear
 from roomlight.scene.description import ObjectSpec, SceneError, SceneSpec, ViewSpec
 
 __all__ = ["object_geometry", "mitsuba_object", "view_objects", "object_points", "load_view_target",
@@ -102,7 +103,7 @@ def _read_image(path: Path) -> np.ndarray:
     except Exception as exc:
         raise SceneError(f"{path}: cannot read the image ({exc})") from None
     # 8-bit images are gamma-2.2 encoded, as the benchmark writes them and as cameras roughly do
-    return img ** 2.2
+    return display_to_linear(img)
 
 
 def load_view_target(view: ViewSpec, prefer: str = "ldr") -> tuple[torch.Tensor, torch.Tensor]:
