@@ -118,12 +118,10 @@ class Fitter:
             self.sensor = 0  # the scene's own sensor: the whole frame
             self.target, self.mask = self.full_target, self.full_mask
         else:
-            from roomlight.render.camera import cropped_sensor
-
             if sensor_dict is None:
                 raise RoomlightError("Fitter: a rendering window needs the view's sensor dict")
             x0, y0, w, h = window
-            self.sensor = escene.mi.load_dict(cropped_sensor(sensor_dict, x0, y0, w, h))
+            self.sensor = escene.cropped_sensor(sensor_dict, window)
             self.target = self.full_target[y0:y0 + h, x0:x0 + w]
             self.mask = self.full_mask[y0:y0 + h, x0:x0 + w]
         self.points = points if (points is not None and light.has_depth and config.lambda_rep > 0) else None
