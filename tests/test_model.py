@@ -1,7 +1,7 @@
 """Tests of the prior's network, normalisation and checkpoint formats (roomlight.model).
 
 The authors'-format parity test compares the package against an independent functional forward
-written here from the spec (docs: authors-checkpoint.md, DESIGN.md §3), using only F.conv2d,
+written here from the spec (docs/model.md, "The authors' run folder"), using only F.conv2d,
 F.group_norm and explicit index-based spherical padding.
 """
 
@@ -350,7 +350,7 @@ def test_from_pretrained_errors(tmp_path):
 
 # ----------------------------------------------------------------------------- authors' format
 def authors_layout() -> dict[str, tuple[int, ...]]:
-    """The authors' state_dict keys and shapes, transcribed from authors-checkpoint.md."""
+    """The authors' state_dict keys and shapes, transcribed from the authors' published checkpoint (docs/model.md)."""
     E, D = "encoder.model.", "decoder.model."
     out: dict[str, tuple[int, ...]] = {}
 

@@ -1,4 +1,4 @@
-"""Evaluating the prior as a model of panoramas (paper Tab. 1; issue 4, part 6).
+"""Evaluating the prior as a model of panoramas (paper Tab. 1; docs/training.md).
 
 For every panorama of an evaluation set, two reconstructions are scored:
 

@@ -307,7 +307,7 @@ def luminance(radiance):
 
 
 def exposure_calibrate(radiance):
-    """Scale a panorama so that its log-average luminance is 1 (DESIGN.md §1).
+    """Scale a panorama so that its log-average luminance is 1 (docs/conventions.md).
 
     ``factor = exp(mean(log(Y + 1e-6)))`` over all pixels (unweighted), computed in float64;
     returns ``(radiance / factor, factor)``. Undo with :func:`exposure_uncalibrate`.
