@@ -23,9 +23,6 @@ import click
 
 __all__ = ["DemoConfig", "run_demo", "bundled_prior_path"]
 
-PARALLAX_PROBES = ["-0.8,-0.65,-2.4,0.33,mirror", "0.7,-0.6,-1.4,0.3,mirror", "-0.05,-1.05,-1.9,0.3,diffuse"]
-
-
 @dataclass
 class DemoConfig:
     """Sizes of the demo; the defaults finish in a few minutes on a 2-core laptop CPU."""
@@ -88,7 +85,7 @@ def run_demo(cfg: DemoConfig) -> dict:
     write_panorama(panos / "room.exr", (rad.numpy(), depth.numpy()), half=False, metadata={"source": room_name})
 
     _say(2, total, "parallax figure: 2.5D area light vs env map", t0)
-    from roomlight.cli.demo import parallax_figure
+    from roomlight.parallax import parallax_figure
 
     parallax_figure(out / "parallax", rad, depth, res=2 * cfg.res, spp=cfg.gt_spp)
 

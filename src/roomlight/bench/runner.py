@@ -126,7 +126,7 @@ def _json_default(obj):
 def _write_recovered(path: Path, result) -> None:
     from roomlight.emitter.sphere import sphere_depth
     from roomlight.io import write_panorama
-    from roomlight.render.scene import parse_emitter_kind
+    from roomlight.emitter.kind import parse_emitter_kind
 
     rad = result.radiance.detach().float().cpu()
     depth = result.depth
@@ -154,7 +154,7 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
             ``emitter_kind``, and optionally ``history``, ``best_iteration``, ``seconds``.
     """
     from roomlight.scene.build import load_view_target
-    from roomlight.scene.description import load_scene
+    from roomlight.scene.build import load_scene
 
     cdir = case.directory(out_dir)
     cdir.mkdir(parents=True, exist_ok=True)

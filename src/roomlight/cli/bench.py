@@ -113,7 +113,7 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
             raise click.UsageError(f"methods {', '.join(needs_prior)} need --model (a trained prior); "
                                    "or choose --methods without them")
         from roomlight.render.variant import torch_device
-        from roomlight.train.checkpoint import load_run_model
+        from roomlight.model.runs import load_run_model
 
         # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
         # on the device Mitsuba renders on, so decoded maps reach the renderer without copies

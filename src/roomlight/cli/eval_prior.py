@@ -32,7 +32,7 @@ def command(model_path, data_dir, split, fit_steps, depth_only, limit, batch_siz
     from roomlight.data.splits import find_panoramas, has_split_folders
     from roomlight.eval.prior import evaluate_prior, report_markdown, write_report
     from roomlight.fit import FitConfig
-    from roomlight.train.checkpoint import load_run_model, resolve_run_model
+    from roomlight.model.runs import load_run_model, resolve_run_model
 
     model = load_run_model(model_path)
     if split == "auto":

@@ -52,7 +52,7 @@ def command(scene, method, out_dir, model, preset, quiet, **overrides):
         if model is None:
             raise click.UsageError(f"--method {method} needs --model (a trained prior)")
         from roomlight.render.variant import torch_device
-        from roomlight.train.checkpoint import load_run_model
+        from roomlight.model.runs import load_run_model
 
         # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
         # on the device Mitsuba renders on, so decoded maps reach the renderer without copies

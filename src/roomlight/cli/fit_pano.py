@@ -45,8 +45,8 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out
     from roomlight.eval.prior import panorama_metrics
     from roomlight.fit import FitConfig, fit_latent
     from roomlight.io import save_png, write_panorama
-    from roomlight.train.checkpoint import load_run_model
-    from roomlight.train.panels import training_panel
+    from roomlight.model.runs import load_run_model
+    from roomlight.eval.panels import training_panel
 
     model = load_run_model(model_path)
     device = next(model.parameters()).device

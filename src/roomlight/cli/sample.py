@@ -64,7 +64,7 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
     from roomlight.eval.samples import (decode_latents, interpolate_latents, probe_layout, render_probes,
                                         sample_latents)
     from roomlight.io import write_exr, write_panorama
-    from roomlight.train.checkpoint import load_run_model
+    from roomlight.model.runs import load_run_model
 
     model = load_run_model(model_path)
     out = Path(out_dir)

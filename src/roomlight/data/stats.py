@@ -1,4 +1,4 @@
-"""Dataset statistics: the prior's normalisation (issue 4, part 3) and a summary of the data.
+"""Dataset statistics: the prior's normalisation (docs/model.md) and a summary of the data.
 
 The normalisation statistics are the per-channel mean and standard deviation of
 (log1p R, log1p G, log1p B, log D) over every pixel of the training panoramas, computed at the

@@ -1,4 +1,4 @@
-"""Image panels for monitoring training: inputs, reconstructions and prior samples side by side."""
+"""Image panels: inputs, reconstructions and prior samples side by side (training logs, ``fit-pano``)."""
 
 from __future__ import annotations
 
