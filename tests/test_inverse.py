@@ -10,7 +10,7 @@ from roomlight.inverse import (
     repulsion_penalty, smoothness,
 )
 from roomlight.inverse.config import fit_config
-from roomlight.inverse.fit import mask_window
+from roomlight.inverse.fitter import mask_window
 from roomlight.errors import RoomlightError
 
 from helpers_scene import make_tiny_scene

@@ -27,7 +27,8 @@ LAYERS = [
     ["emitter"],
     ["io"],
     ["geometry"],
-    ["color", "errors"],
+    ["color", "config"],
+    ["errors"],
 ]
 
 

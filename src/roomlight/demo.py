@@ -29,7 +29,7 @@ class DemoConfig:
 
     out: Path = Path("roomlight-demo")
     height: int = 64          #: panorama / emitter height (width 2x)
-    res: int = 96             #: benchmark image size (square)
+    res: tuple[int, int] = (96, 96)  #: benchmark image size (H, W)
     iterations: int = 120     #: fitting iterations per method
     spp: int = 8              #: samples per pixel per fitting step
     gt_spp: int = 128         #: samples per pixel of the ground-truth and evaluation renders
@@ -87,12 +87,12 @@ def run_demo(cfg: DemoConfig) -> dict:
     _say(2, total, "parallax figure: 2.5D area light vs env map", t0)
     from roomlight.parallax import parallax_figure
 
-    parallax_figure(out / "parallax", rad, depth, res=2 * cfg.res, spp=cfg.gt_spp)
+    parallax_figure(out / "parallax", rad, depth, res=(2 * cfg.res[0], 2 * cfg.res[1]), spp=cfg.gt_spp)
 
-    _say(3, total, f"benchmark scene ({cfg.material}, {cfg.res}x{cfg.res})", t0)
+    _say(3, total, f"benchmark scene ({cfg.material}, {cfg.res[0]}x{cfg.res[1]})", t0)
     bench = out / "bench"
-    make_benchmark(panos, bench, BenchConfig(n=1, seed=cfg.seed, emitter_height=cfg.height, width=cfg.res,
-                                             height=cfg.res, spp=cfg.gt_spp, materials=(cfg.material,)),
+    make_benchmark(panos, bench, BenchConfig(n=1, seed=cfg.seed, emitter_height=cfg.height, width=cfg.res[1],
+                                             height=cfg.res[0], spp=cfg.gt_spp, materials=(cfg.material,)),
                    progress=False)
 
     model = None

@@ -15,9 +15,14 @@ __all__ = ["PARALLAX_PROBES", "parallax_figure"]
 PARALLAX_PROBES = ["-0.8,-0.65,-2.4,0.33,mirror", "0.7,-0.6,-1.4,0.3,mirror", "-0.05,-1.05,-1.9,0.3,diffuse"]
 
 
-def parallax_figure(out_dir, rad, depth, res: int = 192, spp: int = 64) -> dict:
+def parallax_figure(out_dir, rad, depth, res: tuple[int, int] = (192, 192), spp: int = 64) -> dict:
     """Write ``mesh/`` and ``envmap/`` emitter bundles, probe renders under both, and
-    ``comparison.png`` to ``out_dir``; returns the mean absolute difference of the two renders."""
+    ``comparison.png`` to ``out_dir``; returns the mean absolute difference of the two renders.
+
+    Args:
+        rad: (H, W, 3) linear radiance; depth: (H, W) radial depth in metres (torch tensors).
+        res: (height, width) of the probe renders, pixels.
+    """
     import numpy as np
 
     from roomlight.emitter.export import export_emitter
@@ -35,7 +40,7 @@ def parallax_figure(out_dir, rad, depth, res: int = 192, spp: int = 64) -> dict:
     near = float(depth[depth.shape[0] // 2:, :].min())
     scale = min(1.0, 0.8 * near / 2.7)
     probes = [type(p)(tuple(c * scale for c in p.center), p.radius * scale, p.material) for p in probes]
-    sensor = perspective_sensor((0.0, 0.0, 0.0), (0.0, -0.65 * scale, -1.8 * scale), (0.0, 1.0, 0.0), 65.0, res, res)
+    sensor = perspective_sensor((0.0, 0.0, 0.0), (0.0, -0.65 * scale, -1.8 * scale), (0.0, 1.0, 0.0), 65.0, res[1], res[0])
     renders = {}
     for kind in ("mesh", "envmap"):
         img = render_bundle(out / kind, sensor, probes, spp=spp).numpy()

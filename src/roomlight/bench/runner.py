@@ -46,6 +46,9 @@ from roomlight.bench.rendering import render_view
 __all__ = ["Case", "RunSummary", "EVAL_SEEDS", "parse_shard", "list_cases", "run_case", "run_benchmark",
            "known_methods", "oracle_fit", "ORACLE", "RESULT", "RUN_FILE"]
 
+#: Samples per pixel of the scoring re-renders (the paper uses 4096).
+DEFAULT_EVAL_SPP = 256
+
 RESULT = "result.json"
 #: Pseudo-method: the ground-truth emitter, re-rendered (the metrics' noise floor).
 ORACLE = "oracle"
@@ -247,7 +250,7 @@ def _check_run_file(out: Path, settings: dict) -> None:
     _write_json(f, settings)
 
 
-def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = 256,
+def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = DEFAULT_EVAL_SPP,
                   shard=(0, 1), max_depth: int = 4, progress: bool = True, fit=None) -> RunSummary:
     """Run (a shard of) the benchmark; see the module docstring.
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from roomlight.cli.common import RESOLUTION
 from roomlight.demo import DemoConfig
 
 
@@ -13,7 +14,8 @@ from roomlight.demo import DemoConfig
 @click.option("--out", "out_dir", default="roomlight-demo", show_default=True, type=click.Path(file_okay=False))
 @click.option("--height", type=int, default=DemoConfig.height, show_default=True,
               help="Panorama height (width is twice this).")
-@click.option("--res", type=int, default=DemoConfig.res, show_default=True, help="Benchmark image size (pixels).")
+@click.option("--res", type=RESOLUTION, default=f"{DemoConfig.res[0]}x{DemoConfig.res[1]}", show_default=True,
+              help="Benchmark image size HxW (one number: square).")
 @click.option("--iterations", type=int, default=DemoConfig.iterations, show_default=True,
               help="Fitting iterations per method.")
 @click.option("--spp", type=int, default=DemoConfig.spp, show_default=True, help="Samples per pixel per fitting step.")

@@ -23,7 +23,7 @@ from roomlight.data.dataset import collate_panoramas
 from roomlight.eval.lpips import load_lpips
 from roomlight.color import to_display_at_key
 from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim
-from roomlight.fit.latent import FitConfig, fit_latent
+from roomlight.fit.latent import LatentFitConfig, fit_latent
 
 __all__ = ["METRICS", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
 
@@ -58,7 +58,7 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
     return out
 
 
-def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), batch_size: int = 8,
+def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFitConfig(), batch_size: int = 8,
                    depth_only_fit: bool = False, progress: bool = True, note=print) -> dict:
     """Score encoder reconstructions and latent fits over ``dataset``.
 
@@ -72,7 +72,7 @@ def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), b
         note: receives messages (skipped files, LPIPS availability).
     Returns:
         ``{"count", "rows": {row: {metric: mean}}, "per_image": [...], "skipped": [...],
-        "lpips": None or reason, "fit": FitConfig dict}``.
+        "lpips": None or reason, "fit": LatentFitConfig dict}``.
     """
     from tqdm import tqdm
 
@@ -85,7 +85,7 @@ def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), b
     if fit_config is not None:
         rows["latent fit"] = fit_config
         if depth_only_fit:
-            rows["latent fit (depth only)"] = FitConfig(**{**fit_config.to_dict(), "target": "depth"})
+            rows["latent fit (depth only)"] = fit_config.override(target="depth")
     per_image, skipped = [], []
     values: dict[str, dict[str, list]] = {r: {} for r in rows}
     # The bar counts work units: one per batch for the encoder pass, one per latent-fit step, so a
