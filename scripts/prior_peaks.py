@@ -13,7 +13,7 @@ import torch
 
 from roomlight.data.dataset import load_training_pair
 from roomlight.eval.metrics import peak_contrast
-from roomlight.train.checkpoint import load_run_model
+from roomlight.model.runs import load_run_model
 
 
 def main() -> None:

@@ -1,8 +1,7 @@
-"""The synthetic benchmark: metrics, camera recording, placement rules, builder, runner, report, CLI."""
+"""The synthetic benchmark: placement rules, builder, runner, report figures, CLI (scoring: test_bench_scoring.py)."""
 
 import json
 import math
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -10,81 +9,14 @@ import pytest
 import torch
 
 from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import angular_error_deg, psnr_ldr, rmse_hdr, score_view
-from roomlight.bench.recording import exposure_for, record_ldr, saturated_fraction
-from roomlight.errors import RoomlightError, ShapeError
+from roomlight.bench.metrics import psnr_ldr, rmse_hdr
+from roomlight.bench.recording import record_ldr
+from roomlight.errors import RoomlightError
 from roomlight.examples import example_room
 from roomlight.io import write_panorama
 
 #: Small settings shared by the builder fixture and the CLI test (which then resumes the build).
 SMALL = {"emitter_height": 16, "width": 32, "height": 32, "spp": 16, "materials": ("diffuse", "mirror")}
-
-
-def img(*pixels):
-    """A (1, N, 3) float64 image from N RGB triples."""
-    return np.array([pixels], dtype=np.float64)
-
-
-# ----------------------------------------------------------------------------------- metrics
-def test_psnr_ldr_hand_computed():
-    half = 0.5 ** 2.2  # displays as exactly 0.5
-    gt = img((0, 0, 0), (0.3, 0.3, 0.3), (9, 9, 9))
-    pred = img((half, half, half), (0.3, 0.3, 0.3), (100, 0, 9))
-    mask = np.array([[True, True, False]])
-    # Pixel 0 differs by 0.5 in each channel, pixel 1 not at all: MSE = 3 * 0.25 / 6 = 0.125.
-    assert psnr_ldr(pred, gt, mask) == pytest.approx(10 * math.log10(1 / 0.125))
-    # Pixel 2 (masked out) would count: values above 1 clip, so only G differs, by 1.
-    all_px = (3 * 0.25 + 1.0) / 9
-    assert psnr_ldr(pred, gt) == pytest.approx(10 * math.log10(1 / all_px))
-    assert psnr_ldr(gt, gt, mask) == math.inf
-    # Torch inputs and an integer mask give the same numbers.
-    assert psnr_ldr(torch.tensor(pred), torch.tensor(gt), torch.tensor(mask.astype(np.uint8))) == pytest.approx(
-        10 * math.log10(8))
-
-
-def test_rmse_hdr_hand_computed():
-    gt = img((1, 2, 3), (0, 0, 0))
-    pred = img((1, 2, 5), (100, 100, 100))
-    assert rmse_hdr(pred, gt, np.array([[True, False]])) == pytest.approx(math.sqrt(4 / 3))
-    assert rmse_hdr(pred, gt) == pytest.approx(math.sqrt((4 + 3 * 100 ** 2) / 6))
-
-
-def test_angular_error_hand_computed():
-    gt = img((1, 0, 0), (1, 0, 0), (1, 1, 1), (0, 0, 0), (0, 0, 0), (0, 2, 0))
-    pred = img((0, 1, 0), (1, 1, 0), (2, 2, 2), (0, 0, 0), (1, 2, 3), (0, 0, 0))
-    each = [90.0, 45.0, 0.0, 0.0, 90.0, 90.0]
-    assert angular_error_deg(pred, gt) == pytest.approx(np.mean(each))
-    assert angular_error_deg(pred, gt, np.array([[1, 1, 1, 0, 0, 0]])) == pytest.approx(45.0)
-    # Accurate for tiny angles: (1, 1e-6, 0) vs (1, 0, 0) is 1e-6 rad.
-    assert angular_error_deg(img((1, 1e-6, 0)), img((1, 0, 0))) == pytest.approx(math.degrees(1e-6), rel=1e-6)
-
-
-def test_metric_input_errors():
-    a = img((1, 1, 1), (1, 1, 1))
-    with pytest.raises(RoomlightError, match="metrics: the mask selects no pixel"):
-        psnr_ldr(a, a, np.zeros((1, 2), bool))
-    with pytest.raises(ShapeError, match=r"metrics: expected two \(H, W, 3\) images of the same shape"):
-        rmse_hdr(a, img((1, 1, 1)))
-    with pytest.raises(ShapeError, match=r"metrics: mask is \(2, 1\), images are \(1, 2\)"):
-        angular_error_deg(a, a, np.ones((2, 1), bool))
-    s = score_view(a, a * 2, np.ones((1, 2), bool))
-    assert s["pixels"] == 2 and s["rmse_hdr"] == pytest.approx(1.0) and s["angular_error"] == pytest.approx(0.0)
-
-
-# ----------------------------------------------------------------------------------- recording
-def test_exposure_rule_and_recording():
-    hdr = np.zeros((2, 2, 3))
-    hdr[0] = 0.5  # luminance 0.5 (weights sum to 1)
-    hdr[1] = 8.0
-    mask = np.array([[True, True], [False, False]])
-    k = exposure_for(hdr, mask)
-    assert k == pytest.approx(0.18 / (0.5 + 1e-6))
-    ldr = record_ldr(np.array([[[0.0, 0.5 ** 2.2, 1.0], [7.0, -1.0, np.nan]]]))
-    assert ldr.dtype == np.uint8
-    assert ldr.tolist() == [[[0, 128, 255], [255, 0, 0]]]
-    assert saturated_fraction(record_ldr(hdr * k), np.ones((2, 2), bool)) == pytest.approx(0.5)
-    with pytest.raises(RoomlightError, match="exposure: the object mask is empty"):
-        exposure_for(hdr, np.zeros((2, 2), bool))
 
 
 # ----------------------------------------------------------------------------------- placement
@@ -356,100 +288,6 @@ def test_shards_partition_the_cases(bench):
     for bad in ("4/4", "x", "1/0", "-1/2"):
         with pytest.raises(BenchError, match="--shard"):
             parse_shard(bad)
-
-
-# ----------------------------------------------------------------------------------- report
-def _fake_results(root: Path, rows):
-    for scene, material, method, psnr, rmse, ang in rows:
-        d = root / "cases" / scene / material / method
-        d.mkdir(parents=True)
-        m = {"psnr_ldr": psnr, "rmse_hdr": rmse, "angular_error": ang, "pixels": 10}
-        (d / "result.json").write_text(json.dumps({
-            "scene": f"{scene}/{material}", "panorama": scene, "material": material, "method": method,
-            "emitter_kind": "envmap" if method.endswith("envmap") else "mesh",
-            "metrics": {"eval": m, "input": m}, "fit_seconds": 2.0}))
-
-
-def test_report_tables_hand_computed(tmp_path):
-    from roomlight.bench.report import markdown_table, write_report
-
-    _fake_results(tmp_path, [
-        ("r1", "diffuse", "prior", 20.0, 0.1, 1.0), ("r2", "diffuse", "prior", 30.0, 0.3, 3.0),
-        ("r1", "diffuse", "direct-envmap", 10.0, 0.5, 2.0), ("r2", "diffuse", "direct-envmap", 10.0, 0.7, 1.0),
-        ("r1", "mirror", "prior", 15.0, 2.0, 4.0),
-    ])
-    paths = write_report(tmp_path, figures=False, progress=False)
-    summary = json.loads(paths["json"].read_text())
-    cell = summary["views"]["eval"]["prior"]["diffuse"]["psnr_ldr"]
-    assert cell == {"mean": 25.0, "std": 5.0, "n": 2}
-    assert summary["views"]["eval"]["direct-envmap"]["diffuse"]["rmse_hdr"]["mean"] == pytest.approx(0.6)
-    md = markdown_table([json.loads(p.read_text()) for p in sorted(tmp_path.rglob("result.json"))], "eval")
-    lines = md.splitlines()
-    assert lines[0].startswith("| Method | Emitter | PSNR LDR ↑ diffuse | PSNR LDR ↑ mirror | RMSE HDR ↓ diffuse")
-    # Rows in the paper's order (smoothness baselines first); best per column in bold.
-    assert lines[2].startswith("| direct-envmap | Env map | 10.00 ± 0.00 | – | 0.600 ± 0.100 |")
-    assert lines[3].startswith("| prior | 2.5D AL | **25.00 ± 5.00** | 15.00 ± 0.00 | **0.200 ± 0.100** |")
-    # Angular error: lower is better, so the env map's 1.5 wins over the prior's 2.0.
-    assert "| **1.500 ± 0.500** |" in lines[2] and "| 2.000 ± 1.000 |" in lines[3]
-    import csv
-
-    with open(paths["csv"]) as fh:
-        rows = list(csv.DictReader(fh))
-    prior = next(r for r in rows if r["method"] == "prior")
-    assert float(prior["psnr_ldr_diffuse_mean"]) == 25.0 and float(prior["psnr_ldr_diffuse_std"]) == 5.0
-    assert prior["psnr_ldr_mirror_n"] == "1"
-    with open(paths["cases"]) as fh:
-        assert len(list(csv.DictReader(fh))) == 10  # 5 cases x 2 views
-    assert "Table 2" in paths["markdown"].read_text() and paths["html"].is_file()
-
-
-def test_paired_differences_hand_computed(tmp_path):
-    """Per-scene differences prior - baseline: pairing by scene, win counts with the metric's
-    direction, scenes missing on either side left out; the report carries them."""
-    from roomlight.bench.report import write_report
-
-    _fake_results(tmp_path, [
-        ("r1", "diffuse", "prior", 20.0, 0.1, 1.0), ("r2", "diffuse", "prior", 30.0, 0.3, 3.0),
-        ("r3", "diffuse", "prior", 12.0, 0.9, 5.0),
-        ("r1", "diffuse", "direct-envmap", 10.0, 0.5, 2.0), ("r2", "diffuse", "direct-envmap", 10.0, 0.7, 1.0),
-        ("r1", "diffuse", "oracle", 40.0, 0.0, 0.0),  # never a baseline
-    ])
-    paths = write_report(tmp_path, figures=False, progress=False)
-    summary = json.loads(paths["json"].read_text())
-    paired = summary["paired"]["eval"]
-    assert set(paired) == {"direct-envmap"}
-    psnr = paired["direct-envmap"]["diffuse"]["psnr_ldr"]
-    assert psnr["n"] == 2 and psnr["mean"] == pytest.approx(15.0) and psnr["wins"] == 2  # +10, +20
-    lo, hi = psnr["ci95"]
-    assert 10.0 <= lo <= 15.0 <= hi <= 20.0
-    rmse = paired["direct-envmap"]["diffuse"]["rmse_hdr"]
-    assert rmse["mean"] == pytest.approx(-0.4) and rmse["wins"] == 2 and rmse["better"] == "lower"
-    ang = paired["direct-envmap"]["diffuse"]["angular_error"]
-    assert ang["mean"] == pytest.approx(0.5) and ang["wins"] == 1  # -1 (win) and +2 (loss)
-    md = paths["markdown"].read_text()
-    assert "| direct-envmap | Δ PSNR LDR (dB, ↑) | +15.00 [" in md and "2/2 ✓" in md
-    assert "Paired differences" in paths["html"].read_text()
-
-
-def test_bootstrap_interval_matches_the_normal_approximation():
-    """For many scenes the percentile bootstrap of a mean approaches mean +- 1.96 s / sqrt(n)
-    (s: the population standard deviation, which is what the bootstrap resamples)."""
-    from roomlight.bench.paired import bootstrap_mean_interval
-
-    x = np.random.default_rng(3).normal(1.0, 2.0, 400)
-    lo, hi = bootstrap_mean_interval(x)
-    half = 1.96 * x.std() / np.sqrt(x.size)
-    assert lo == pytest.approx(x.mean() - half, abs=0.05 * half)
-    assert hi == pytest.approx(x.mean() + half, abs=0.05 * half)
-    assert bootstrap_mean_interval([2.5]) == (2.5, 2.5)
-    assert bootstrap_mean_interval(x) == (lo, hi)  # seeded
-
-
-def test_report_without_results_fails_cleanly(tmp_path):
-    from roomlight.bench.report import write_report
-
-    with pytest.raises(BenchError, match="no results"):
-        write_report(tmp_path)
 
 
 @pytest.mark.mitsuba

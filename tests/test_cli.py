@@ -45,7 +45,7 @@ def test_emitter_bundle_loads_in_mitsuba_and_matches_in_memory_scene(mi, pano_fi
     assert ply["vertices"].shape == (32 * 65 + 2 * 64, 3)
     # The scene read back through Mitsuba's PLY and EXR loaders renders like the in-memory one.
     rad, depth = example_room(32)
-    r = run("render", out, "--out", tmp_path / "r", "--res", "48x32", "--spp", "64", "--fov", "70",
+    r = run("render", out, "--out", tmp_path / "r", "--res", "32x48", "--spp", "64", "--fov", "70",
             "--look-at", "0.3,-0.2,-1", "--sphere", "0.3,-0.4,-1.2,0.25,mirror")
     assert r.exit_code == 0, r.output
     from_file = read_exr(tmp_path / "r" / "render.exr")

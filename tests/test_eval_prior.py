@@ -14,7 +14,7 @@ from click.testing import CliRunner
 from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
 from roomlight.eval import abs_rel, evaluate_prior, load_lpips, psnr, psnr_hdr, report_markdown, ssim, to_ldr
 from roomlight.eval.metrics import gaussian_window, peak_contrast, peak_error_stops
-from roomlight.fit import FitConfig
+from roomlight.fit import LatentFitConfig
 from roomlight.model import Normalization, PanoVAE, get_preset
 
 
@@ -116,7 +116,7 @@ def setup(tmp_path_factory):
 def test_evaluate_prior_report(setup):
     _, ds, model = setup
     notes = []
-    rep = evaluate_prior(model, ds, FitConfig(steps=20), batch_size=2, depth_only_fit=True, progress=False,
+    rep = evaluate_prior(model, ds, LatentFitConfig(steps=20), batch_size=2, depth_only_fit=True, progress=False,
                          note=notes.append)
     assert rep["count"] == 3 and [s["name"] for s in rep["skipped"]] == ["broken.exr"]
     assert list(rep["rows"]) == ["encoder", "latent fit", "latent fit (depth only)"]

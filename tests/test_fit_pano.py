@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
 from roomlight.errors import RoomlightError
-from roomlight.fit import FitConfig, fit_latent
+from roomlight.fit import LatentFitConfig, fit_latent
 from roomlight.io import read_panorama
 from roomlight.model import Normalization, PanoVAE, get_preset
 
@@ -58,7 +58,7 @@ def test_fit_lowers_the_error_and_returns_the_best_iterate(model, toy):
     _, rad, dep = toy
     z0 = torch.zeros(3, model.config.latent_dim)
     start = objective(model, rad, dep, z0)
-    res = fit_latent(model, rad, dep, FitConfig(steps=60))
+    res = fit_latent(model, rad, dep, LatentFitConfig(steps=60))
     assert res.z.shape == (3, model.config.latent_dim)
     assert torch.all(res.loss < start * 0.97), (start, res.loss)
     torch.testing.assert_close(res.loss, objective(model, rad, dep, res.z), rtol=1e-5, atol=1e-7)
@@ -76,29 +76,29 @@ def test_fit_recovers_a_panorama_the_decoder_can_express(model):
     with torch.no_grad():
         rad, dep = model.decode(z_true)
     start = objective(model, rad, dep, torch.zeros_like(z_true))
-    res = fit_latent(model, rad, dep, FitConfig(steps=300))
+    res = fit_latent(model, rad, dep, LatentFitConfig(steps=300))
     assert torch.all(res.loss < start / 20), (start, res.loss)
 
 
 def test_each_latent_is_fitted_independently_of_the_batch(model, toy):
     _, rad, dep = toy
-    both = fit_latent(model, rad[:2], dep[:2], FitConfig(steps=15))
-    one = fit_latent(model, rad[1:2], dep[1:2], FitConfig(steps=15))
+    both = fit_latent(model, rad[:2], dep[:2], LatentFitConfig(steps=15))
+    one = fit_latent(model, rad[1:2], dep[1:2], LatentFitConfig(steps=15))
     torch.testing.assert_close(both.z[1:2], one.z, rtol=1e-4, atol=1e-5)
 
 
 def test_radiance_only_and_depth_only_targets(model, toy):
     _, rad, dep = toy
-    r = fit_latent(model, rad, None, FitConfig(steps=30, target="radiance"))
+    r = fit_latent(model, rad, None, LatentFitConfig(steps=30, target="radiance"))
     z0 = torch.zeros(3, model.config.latent_dim)
     assert torch.all(r.loss < objective(model, rad, dep, z0, (0, 1, 2)))
     torch.testing.assert_close(r.loss, objective(model, rad, dep, r.z, (0, 1, 2)), rtol=1e-5, atol=1e-7)
-    d = fit_latent(model, None, dep, FitConfig(steps=30, target="depth"))
+    d = fit_latent(model, None, dep, LatentFitConfig(steps=30, target="depth"))
     assert torch.all(d.loss < objective(model, rad, dep, z0, (3,)))
     with pytest.raises(RoomlightError, match="needs depth"):
-        fit_latent(model, rad, None, FitConfig(target="both"))
+        fit_latent(model, rad, None, LatentFitConfig(target="both"))
     with pytest.raises(RoomlightError, match="target"):
-        FitConfig(target="rgb")
+        LatentFitConfig(target="rgb")
 
 
 def test_learning_rate_decays_exponentially_to_the_final_value(model, toy, monkeypatch):
@@ -111,7 +111,7 @@ def test_learning_rate_decays_exponentially_to_the_final_value(model, toy, monke
         return orig(self, *a, **k)
 
     monkeypatch.setattr(torch.optim.Adam, "step", spy)
-    fit_latent(model, rad[:1], dep[:1], FitConfig(steps=10, lr=0.1, lr_final=0.01))
+    fit_latent(model, rad[:1], dep[:1], LatentFitConfig(steps=10, lr=0.1, lr_final=0.01))
     assert seen[0] == pytest.approx(0.1)
     ratios = [b / a for a, b in zip(seen, seen[1:])]
     assert all(r == pytest.approx(0.1 ** 0.1) for r in ratios)
@@ -181,3 +181,28 @@ def test_convert_cli_writes_a_loadable_checkpoint(tmp_path):
     assert m.metadata["depth_units"] == "scale-free"
     for k, v in src.state_dict().items():
         assert torch.equal(m.state_dict()[k], v)
+
+
+def test_fit_latent_restores_each_parameters_requires_grad(model, toy):
+    _, rad, dep = toy
+    params = list(model.parameters())
+    before = [p.requires_grad for p in params]
+    params[0].requires_grad_(False)  # a partly frozen model comes back partly frozen
+    flags = [p.requires_grad for p in params]
+    try:
+        fit_latent(model, rad[:1], dep[:1], LatentFitConfig(steps=2))
+        assert [p.requires_grad for p in params] == flags
+        assert all(p.grad is None for p in params)  # the decoder got no gradient
+    finally:
+        for p, flag in zip(params, before):
+            p.requires_grad_(flag)
+
+
+def test_latent_fit_config_is_strict_and_round_trips():
+    cfg = LatentFitConfig(steps=7, target="radiance")
+    assert LatentFitConfig.from_dict(cfg.to_dict()) == cfg
+    assert cfg.override(lr=0.05).lr == 0.05
+    with pytest.raises(RoomlightError, match="unknown field"):
+        cfg.override(stpes=3)
+    with pytest.raises(RoomlightError, match="unknown field"):
+        LatentFitConfig.from_dict({"steps": 3, "learning_rate": 0.1})

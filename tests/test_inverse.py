@@ -10,7 +10,7 @@ from roomlight.inverse import (
     repulsion_penalty, smoothness,
 )
 from roomlight.inverse.config import fit_config
-from roomlight.inverse.fit import mask_window
+from roomlight.inverse.fitter import mask_window
 from roomlight.errors import RoomlightError
 
 from helpers_scene import make_tiny_scene
@@ -38,15 +38,31 @@ def test_image_loss_by_hand():
     assert abs(float(t["img"]) - (l2 + 0.1 * lg)) < 1e-4
 
 
-def test_smoothness_wraps_in_longitude_only():
+def _smoothness_reference(f: torch.Tensor) -> float:
+    """Every pixel's four neighbours on the sphere, each neighbouring pair counted once."""
+    h, w = f.shape[:2]
+    pairs = set()
+    for i in range(h):
+        for j in range(w):
+            nbrs = [(i, (j + 1) % w), (i, (j - 1) % w)]
+            nbrs.append((i - 1, j) if i > 0 else (0, (j + w // 2) % w))           # across the north pole
+            nbrs.append((i + 1, j) if i < h - 1 else (h - 1, (j + w // 2) % w))   # across the south pole
+            pairs.update(frozenset(((i, j), n)) for n in nbrs)
+    return float(sum(((f[a] - f[b]) ** 2).sum() for a, b in (tuple(p) for p in pairs)))
+
+
+def test_smoothness_wraps_in_longitude_and_across_the_poles():
     f = torch.zeros(3, 4)
     f[0, 0] = 1.0
-    # horizontal: differences with both neighbours (one across the seam): 2; vertical: one (no pole wrap)
-    assert float(smoothness(f)) == 3.0
+    # longitude: both neighbours (one across the seam) 2; below it 1; across the pole (0, 2) 1
+    assert float(smoothness(f)) == 4.0
     g = torch.arange(12.0).reshape(3, 4)
-    ref = sum((g[i, (j + 1) % 4] - g[i, j]) ** 2 for i in range(3) for j in range(4)) + \
-        sum((g[i + 1, j] - g[i, j]) ** 2 for i in range(2) for j in range(4))
-    assert float(smoothness(g)) == float(ref)
+    assert float(smoothness(g)) == _smoothness_reference(g)
+    h = torch.randn(4, 8, 3, generator=torch.Generator().manual_seed(0), dtype=torch.float64)
+    assert float(smoothness(h)) == pytest.approx(_smoothness_reference(h), rel=1e-12)
+    # a field that is constant on each row (a function of latitude only) has no pole difference
+    rows = torch.arange(4.0)[:, None].expand(4, 8)
+    assert float(smoothness(rows)) == 3 * 8
 
 
 def test_repulsion_zero_with_margin_and_continuous_when_crossing():

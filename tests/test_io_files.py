@@ -7,7 +7,6 @@ Independent references: Mitsuba's own RGBE reader (``mi.Bitmap``) and PLY loader
 from __future__ import annotations
 
 import json
-import time
 
 import numpy as np
 import pytest
@@ -320,15 +319,16 @@ def test_write_hdr_rejects_unrepresentable_values(tmp_path):
 
 
 @pytest.mark.slow
-def test_hdr_read_speed_1024x2048(tmp_path, rng):
+def test_hdr_read_1024x2048_with_literal_and_repeat_runs(tmp_path, rng):
+    # How long this takes is a benchmark figure (benchmarks/bench_io.py), not a test.
     rad = make_radiance(rng, 1024, 2048)
     rad[300:500] = 3.0  # mixture of literal and repeat runs
     write_hdr(tmp_path / "big.hdr", rad)
-    t0 = time.perf_counter()
     out = read_hdr(tmp_path / "big.hdr")
-    elapsed = time.perf_counter() - t0
     assert out.shape == (1024, 2048, 3)
-    assert elapsed < 1.5, f"read_hdr took {elapsed:.2f} s"
+    assert np.allclose(out[300:500], 3.0)
+    # RGBE shares one exponent per pixel: every channel is within 2^-7 of the pixel's largest one
+    assert np.all(np.abs(out - rad).max(-1) <= rad.max(-1) * 2.0 ** -7)
 
 
 # --------------------------------------------------------------------------------------------

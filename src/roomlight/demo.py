@@ -23,16 +23,13 @@ import click
 
 __all__ = ["DemoConfig", "run_demo", "bundled_prior_path"]
 
-PARALLAX_PROBES = ["-0.8,-0.65,-2.4,0.33,mirror", "0.7,-0.6,-1.4,0.3,mirror", "-0.05,-1.05,-1.9,0.3,diffuse"]
-
-
 @dataclass
 class DemoConfig:
     """Sizes of the demo; the defaults finish in a few minutes on a 2-core laptop CPU."""
 
     out: Path = Path("roomlight-demo")
     height: int = 64          #: panorama / emitter height (width 2x)
-    res: int = 96             #: benchmark image size (square)
+    res: tuple[int, int] = (96, 96)  #: benchmark image size (H, W)
     iterations: int = 120     #: fitting iterations per method
     spp: int = 8              #: samples per pixel per fitting step
     gt_spp: int = 128         #: samples per pixel of the ground-truth and evaluation renders
@@ -91,14 +88,14 @@ def run_demo(cfg: DemoConfig) -> dict:
     write_panorama(panos / "room.exr", (rad.numpy(), depth.numpy()), half=False, metadata={"source": room_name})
 
     _say(2, total, "parallax figure: 2.5D area light vs env map", t0)
-    from roomlight.cli.demo import parallax_figure
+    from roomlight.parallax import parallax_figure
 
-    parallax_figure(out / "parallax", rad, depth, res=2 * cfg.res, spp=cfg.gt_spp)
+    parallax_figure(out / "parallax", rad, depth, res=(2 * cfg.res[0], 2 * cfg.res[1]), spp=cfg.gt_spp)
 
-    _say(3, total, f"benchmark scene ({cfg.material}, {cfg.res}x{cfg.res})", t0)
+    _say(3, total, f"benchmark scene ({cfg.material}, {cfg.res[0]}x{cfg.res[1]})", t0)
     bench = out / "bench"
-    make_benchmark(panos, bench, BenchConfig(n=1, seed=cfg.seed, emitter_height=cfg.height, width=cfg.res,
-                                             height=cfg.res, spp=cfg.gt_spp, materials=(cfg.material,)),
+    make_benchmark(panos, bench, BenchConfig(n=1, seed=cfg.seed, emitter_height=cfg.height, width=cfg.res[1],
+                                             height=cfg.res[0], spp=cfg.gt_spp, materials=(cfg.material,)),
                    progress=False)
 
     model = None

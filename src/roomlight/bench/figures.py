@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.metrics import to_ldr
+from roomlight.color import to_display
 
 __all__ = ["ERROR_RANGE", "scene_figure", "scene_figures", "write_index"]
 
@@ -61,7 +61,7 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
 
     from roomlight.io import colorize_depth, read_panorama
     from roomlight.scene.build import load_view_target
-    from roomlight.scene.description import load_scene
+    from roomlight.scene.build import load_scene
 
     scene = load_scene(scene_path)
     gt_eval, mask_eval = (t.numpy() for t in load_view_target(scene.view("eval"), prefer="hdr"))
@@ -86,7 +86,7 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
     FigureCanvasAgg(fig)
     grid = fig.add_gridspec(len(rows), 5, width_ratios=[1, 1, 1, 2, 2], wspace=0.05, hspace=0.25)
     titles = ["probe (eval view)", "probe |LDR error|", "input view", "radiance", "depth"]
-    gt_ldr = to_ldr(gt_eval)
+    gt_ldr = to_display(gt_eval)
     for r, (label, ev, inp, pano, text) in enumerate(rows):
         axes = [fig.add_subplot(grid[r, c]) for c in range(5)]
         for c, ax in enumerate(axes):
@@ -94,19 +94,19 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
             ax.set_yticks([])
             if r == 0:
                 ax.set_title(titles[c], fontsize=9)
-        axes[0].imshow(to_ldr(ev)[crop])
+        axes[0].imshow(to_display(ev)[crop])
         axes[0].set_ylabel(label, fontsize=9)
         if r == 0:
             axes[1].set_facecolor((0.25, 0.25, 0.25))
         else:
-            err = np.abs(to_ldr(ev) - gt_ldr).mean(-1)
+            err = np.abs(to_display(ev) - gt_ldr).mean(-1)
             err = np.ma.masked_where(~mask_eval, err)
             im = axes[1].imshow(err[crop], cmap=cmap, vmin=0.0, vmax=ERROR_RANGE)
             last_err = axes[1]
             axes[1].set_xlabel(text, fontsize=7)
-        axes[2].imshow(to_ldr(inp))
+        axes[2].imshow(to_display(inp))
         if pano is not None:
-            axes[3].imshow(to_ldr(pano.radiance))
+            axes[3].imshow(to_display(pano.radiance))
             if pano.depth is not None:
                 axes[4].imshow(colorize_depth(pano.depth, vmin, vmax, log=vmin is not None and vmin > 0))
             else:
@@ -125,7 +125,7 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
 
 def scene_figures(records: list[dict], out_dir, progress: bool = True) -> dict[str, Path]:
     """One figure per scene of the results (see :func:`scene_figure`); returns {scene id: path}."""
-    from roomlight.bench.report import METHOD_ORDER
+    from roomlight.bench.tables import METHOD_ORDER
 
     by_scene: dict[str, list[dict]] = {}
     for r in records:
@@ -167,7 +167,7 @@ def _md_table_to_html(md: str) -> str:
 def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
     """``index.html``: both tables, links to the CSV/JSON/Markdown files and every scene figure."""
     from roomlight.bench.paired import paired_differences, paired_markdown
-    from roomlight.bench.report import MATERIAL_ORDER, _ordered, markdown_table
+    from roomlight.bench.tables import MATERIAL_ORDER, markdown_table, ordered
 
     out = Path(out_dir)
     parts = ["<!doctype html><html><head><meta charset='utf-8'><title>roomlight benchmark</title>",
@@ -181,7 +181,7 @@ def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
              "<h2>Evaluation view (probe) — Table 2</h2>", _md_table_to_html(markdown_table(records, "eval")),
              "<h2>Paired differences: the prior against each baseline (evaluation view)</h2>",
              _md_table_to_html(paired_markdown(paired_differences(records, "prior", "eval"), "prior",
-                                               _ordered({r["material"] for r in records}, MATERIAL_ORDER))),
+                                               ordered({r["material"] for r in records}, MATERIAL_ORDER))),
              ("<p>Cells: mean per-scene difference prior − baseline [95 % bootstrap interval of the mean] and "
               "the scenes the prior wins; ✓ interval entirely on the good side, ✗ entirely on the bad side.</p>"),
              "<h2>Input view (fitted objects)</h2>", _md_table_to_html(markdown_table(records, "input")),

@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from roomlight.color import DISPLAY_GAMMA, to_display
 from roomlight.errors import RoomlightError, ShapeError
 
 __all__ = ["METRICS", "HIGHER_IS_BETTER", "LDR_GAMMA", "to_ldr", "psnr_ldr", "rmse_hdr", "angular_error_deg",
@@ -33,7 +34,7 @@ METRICS = ("psnr_ldr", "rmse_hdr", "angular_error")
 #: Direction of each metric (for highlighting the best method in reports).
 HIGHER_IS_BETTER = {"psnr_ldr": True, "rmse_hdr": False, "angular_error": False}
 #: The display gamma of the LDR metric and of the benchmark's 8-bit recordings.
-LDR_GAMMA = 2.2
+LDR_GAMMA = DISPLAY_GAMMA
 #: RGB vectors shorter than this count as black in the angular error.
 BLACK = 1e-12
 
@@ -61,10 +62,9 @@ def _np(x) -> np.ndarray:
     return np.asarray(x, dtype=np.float64)
 
 
-def to_ldr(radiance, gamma: float = LDR_GAMMA) -> np.ndarray:
-    """Display values ``clip(x, 0, 1) ** (1 / gamma)`` of linear radiance (any shape), float64."""
-    x = np.nan_to_num(_np(radiance), nan=0.0, posinf=1.0, neginf=0.0)
-    return np.clip(x, 0.0, 1.0) ** (1.0 / gamma)
+#: The benchmark's LDR mapping under its old name: no exposure (the recordings are already
+#: exposed), only clip and gamma; see :func:`roomlight.color.to_display`.
+to_ldr = to_display
 
 
 def psnr_ldr(pred, target, mask=None) -> float:
@@ -75,7 +75,7 @@ def psnr_ldr(pred, target, mask=None) -> float:
         mask: (H, W) bool (nonzero = scored), or None for all pixels.
     """
     p, t = _arrays(pred, target, mask)
-    mse = float(np.mean((to_ldr(p) - to_ldr(t)) ** 2))
+    mse = float(np.mean((to_display(p) - to_display(t)) ** 2))
     return math.inf if mse == 0.0 else 10.0 * math.log10(1.0 / mse)
 
 

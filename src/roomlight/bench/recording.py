@@ -20,18 +20,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from roomlight.color import DISPLAY_GAMMA, MIDDLE_GREY, display_to_uint8, log_average_np, to_display
 from roomlight.errors import RoomlightError
 
-__all__ = ["EXPOSURE_KEY", "LOG_EPS", "SATURATION_TAU", "exposure_for", "record_ldr", "saturated_fraction"]
+__all__ = ["EXPOSURE_KEY", "SATURATION_TAU", "exposure_for", "record_ldr", "saturated_fraction"]
 
 #: Log-average luminance the objects are exposed to.
-EXPOSURE_KEY = 0.18
-#: Added to the luminance before the log (as in DESIGN.md §1's calibration).
-LOG_EPS = 1e-6
+EXPOSURE_KEY = MIDDLE_GREY
 #: A recorded pixel whose largest *linearised* channel ((v / 255) ** 2.2) reaches this counts as
 #: saturated (the fitting's censoring threshold, tau = 0.99).
 SATURATION_TAU = 0.99
-_LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
 def _np(x) -> np.ndarray:
@@ -52,14 +50,13 @@ def exposure_for(hdr, mask, key: float = EXPOSURE_KEY) -> float:
     m = _np(mask).astype(bool)
     if not m.any():
         raise RoomlightError("exposure: the object mask is empty; nothing to meter on")
-    y = np.clip(x[m], 0.0, None) @ _LUMA
-    k = key / float(np.exp(np.mean(np.log(y + LOG_EPS))))
+    k = key / log_average_np(x[m])
     if not np.isfinite(k) or k <= 0:
         raise RoomlightError(f"exposure: cannot meter the objects (log-average luminance gives k = {k})")
     return k
 
 
-def record_ldr(hdr, gamma: float = 2.2) -> np.ndarray:
+def record_ldr(hdr, gamma: float = DISPLAY_GAMMA) -> np.ndarray:
     """8-bit recording of a linear image already at the camera's exposure.
 
     Args:
@@ -67,11 +64,10 @@ def record_ldr(hdr, gamma: float = 2.2) -> np.ndarray:
     Returns:
         (H, W, 3) uint8 ``round(255 * clip(hdr, 0, 1) ** (1 / gamma))``.
     """
-    x = np.nan_to_num(_np(hdr), nan=0.0, posinf=1.0, neginf=0.0)
-    return np.rint(255.0 * np.clip(x, 0.0, 1.0) ** (1.0 / gamma)).astype(np.uint8)
+    return display_to_uint8(to_display(_np(hdr), gamma))
 
 
-def saturated_fraction(ldr: np.ndarray, mask, tau: float = SATURATION_TAU, gamma: float = 2.2) -> float:
+def saturated_fraction(ldr: np.ndarray, mask, tau: float = SATURATION_TAU, gamma: float = DISPLAY_GAMMA) -> float:
     """Fraction of mask pixels of an 8-bit image whose largest linearised channel is >= ``tau``."""
     m = _np(mask).astype(bool)
     if not m.any():

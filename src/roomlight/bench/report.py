@@ -21,24 +21,20 @@ from __future__ import annotations
 
 import csv
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
 from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
+from roomlight.bench.metrics import METRICS
 from roomlight.bench.paired import paired_differences, paired_markdown
 from roomlight.bench.runner import RESULT
+from roomlight.bench.tables import (MATERIAL_ORDER, METHOD_ORDER, METRIC_LABELS, VIEWS, markdown_table, ordered,
+                                    representation, summarize, write_wide_csv)
 
-__all__ = ["METRIC_LABELS", "METHOD_ORDER", "collect_results", "collect_failures", "summarize",
-           "representation", "markdown_table", "write_tables", "write_report"]
-
-METRIC_LABELS = {"psnr_ldr": "PSNR LDR ↑", "rmse_hdr": "RMSE HDR ↓", "angular_error": "RGB angular error (°) ↓"}
-#: Row order of the table (the paper's: smoothness baselines, then the priors); others follow.
-METHOD_ORDER = ("direct-envmap", "direct-sphere", "direct-al", "prior-envmap", "prior", "oracle")
-MATERIAL_ORDER = ("diffuse", "matte", "mirror")
-VIEWS = ("eval", "input")
+__all__ = ["collect_results", "collect_failures", "write_tables", "write_report",
+           # re-exported from roomlight.bench.tables, where the table layout lives
+           "METRIC_LABELS", "METHOD_ORDER", "summarize", "representation", "markdown_table"]
 
 
 def collect_results(res_dir) -> list[dict]:
@@ -83,109 +79,6 @@ def collect_failures(res_dir) -> list[dict]:
     return out
 
 
-def _ordered(values, order) -> list[str]:
-    vals = sorted(set(values))
-    return [v for v in order if v in vals] + [v for v in vals if v not in order]
-
-
-def representation(kind: str) -> str:
-    """Display name of an emitter kind (``mesh``, ``envmap``, ``sphere:R``)."""
-    if kind.startswith("sphere"):
-        return "Sphere proxy"
-    return {"mesh": "2.5D AL", "envmap": "Env map"}.get(kind, kind)
-
-
-def summarize(records: list[dict], view: str = "eval") -> dict:
-    """``{method: {material: {metric: {"mean", "std", "n"}}}}`` over the records of one view."""
-    groups: dict = {}
-    for r in records:
-        m = r["metrics"].get(view)
-        if m is None:
-            continue
-        g = groups.setdefault(r["method"], {}).setdefault(r["material"], {k: [] for k in METRICS})
-        for k in METRICS:
-            g[k].append(float(m[k]))
-    out: dict = {}
-    for method, mats in groups.items():
-        for mat, vals in mats.items():
-            for k, v in vals.items():
-                a = np.asarray(v, np.float64)
-                out.setdefault(method, {}).setdefault(mat, {})[k] = {
-                    "mean": float(a.mean()), "std": float(a.std()) if np.isfinite(a).all() else float("nan"),
-                    "n": int(a.size)}
-    return out
-
-
-def _fmt(x: float, metric: str) -> str:
-    if math.isinf(x):
-        return "inf"
-    if math.isnan(x):
-        return "nan"
-    return f"{x:.2f}" if metric == "psnr_ldr" else f"{x:.3f}"
-
-
-def _best(summary: dict, methods, material: str, metric: str) -> str | None:
-    vals = [(summary[m][material][metric]["mean"], m) for m in methods
-            if m != "oracle" and material in summary.get(m, {})]
-    vals = [(v, m) for v, m in vals if not math.isnan(v)]
-    if len(vals) < 2:
-        return None
-    return (max if HIGHER_IS_BETTER[metric] else min)(vals)[1]
-
-
-def _kinds(records) -> dict[str, str]:
-    kinds: dict[str, set] = {}
-    for r in records:
-        kinds.setdefault(r["method"], set()).add(representation(r.get("emitter_kind", "?")))
-    return {m: "/".join(sorted(k)) for m, k in kinds.items()}
-
-
-def markdown_table(records: list[dict], view: str = "eval") -> str:
-    """The Table 2 layout as Markdown (best mean per column in bold; the oracle never counts)."""
-    summary = summarize(records, view)
-    if not summary:
-        return "_no results for this view_\n"
-    methods = _ordered(summary, METHOD_ORDER)
-    materials = _ordered([mat for m in summary.values() for mat in m], MATERIAL_ORDER)
-    kinds = _kinds(records)
-    head = ["Method", "Emitter"] + [f"{METRIC_LABELS[k]} {mat}" for k in METRICS for mat in materials]
-    lines = ["| " + " | ".join(head) + " |", "|" + "|".join(["---"] * 2 + [":---:"] * (len(head) - 2)) + "|"]
-    best = {(k, mat): _best(summary, methods, mat, k) for k in METRICS for mat in materials}
-    for m in methods:
-        cells = [m, kinds.get(m, "")]
-        for k in METRICS:
-            for mat in materials:
-                s = summary[m].get(mat, {}).get(k)
-                if s is None:
-                    cells.append("–")
-                    continue
-                text = f"{_fmt(s['mean'], k)} ± {_fmt(s['std'], k)}"
-                cells.append(f"**{text}**" if best[(k, mat)] == m else text)
-        lines.append("| " + " | ".join(cells) + " |")
-    n = {mat: max(summary[m].get(mat, {}).get(METRICS[0], {}).get("n", 0) for m in methods) for mat in materials}
-    lines.append("")
-    lines.append("Scenes per material: " + ", ".join(f"{mat} {n[mat]}" for mat in materials) + ".")
-    return "\n".join(lines) + "\n"
-
-
-def _wide_csv(path: Path, records: list[dict], view: str) -> None:
-    summary = summarize(records, view)
-    methods = _ordered(summary, METHOD_ORDER)
-    materials = _ordered([mat for m in summary.values() for mat in m], MATERIAL_ORDER)
-    kinds = _kinds(records)
-    cols = [f"{k}_{mat}_{s}" for k in METRICS for mat in materials for s in ("mean", "std", "n")]
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["method", "emitter"] + cols)
-        for m in methods:
-            row = [m, kinds.get(m, "")]
-            for k in METRICS:
-                for mat in materials:
-                    s = summary[m].get(mat, {}).get(k)
-                    row += [s["mean"], s["std"], s["n"]] if s else ["", "", 0]
-            w.writerow(row)
-
-
 def _cases_csv(path: Path, records: list[dict]) -> None:
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
@@ -215,14 +108,14 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
     failures = failures or []
     paths = {"csv": out / "table.csv", "csv_input": out / "table_input.csv", "cases": out / "cases.csv",
              "json": out / "summary.json", "markdown": out / "report.md"}
-    _wide_csv(paths["csv"], records, "eval")
-    _wide_csv(paths["csv_input"], records, "input")
+    write_wide_csv(paths["csv"], records, "eval")
+    write_wide_csv(paths["csv_input"], records, "input")
     _cases_csv(paths["cases"], records)
     timing = _timing(records)
     summary = {"views": {v: summarize(records, v) for v in VIEWS}, "cases": len(records),
                "scenes": len({r["scene"] for r in records}),
-               "methods": _ordered({r["method"] for r in records}, METHOD_ORDER),
-               "materials": _ordered({r["material"] for r in records}, MATERIAL_ORDER),
+               "methods": ordered({r["method"] for r in records}, METHOD_ORDER),
+               "materials": ordered({r["material"] for r in records}, MATERIAL_ORDER),
                "timing": timing, "failed": [f.get("case", "?") for f in failures],
                "std": "population standard deviation over scenes (ddof = 0)",
                "paired": {v: paired_differences(records, "prior", v) for v in VIEWS},
@@ -238,7 +131,7 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
           "## Paired differences, input view", "",
           paired_markdown(summary["paired"]["input"], "prior", summary["materials"]),
           "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
-    for m in _ordered(timing, METHOD_ORDER):
+    for m in ordered(timing, METHOD_ORDER):
         md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")
     if failures:
         md += ["", "## Failed cases", ""]

@@ -46,6 +46,9 @@ from roomlight.bench.rendering import render_view
 __all__ = ["Case", "RunSummary", "EVAL_SEEDS", "parse_shard", "list_cases", "run_case", "run_benchmark",
            "known_methods", "oracle_fit", "ORACLE", "RESULT", "RUN_FILE"]
 
+#: Samples per pixel of the scoring re-renders (the paper uses 4096).
+DEFAULT_EVAL_SPP = 256
+
 RESULT = "result.json"
 #: Pseudo-method: the ground-truth emitter, re-rendered (the metrics' noise floor).
 ORACLE = "oracle"
@@ -126,7 +129,7 @@ def _json_default(obj):
 def _write_recovered(path: Path, result) -> None:
     from roomlight.emitter.sphere import sphere_depth
     from roomlight.io import write_panorama
-    from roomlight.render.scene import parse_emitter_kind
+    from roomlight.emitter.kind import parse_emitter_kind
 
     rad = result.radiance.detach().float().cpu()
     depth = result.depth
@@ -154,7 +157,7 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
             ``emitter_kind``, and optionally ``history``, ``best_iteration``, ``seconds``.
     """
     from roomlight.scene.build import load_view_target
-    from roomlight.scene.description import load_scene
+    from roomlight.scene.build import load_scene
 
     cdir = case.directory(out_dir)
     cdir.mkdir(parents=True, exist_ok=True)
@@ -247,7 +250,7 @@ def _check_run_file(out: Path, settings: dict) -> None:
     _write_json(f, settings)
 
 
-def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = 256,
+def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = DEFAULT_EVAL_SPP,
                   shard=(0, 1), max_depth: int = 4, progress: bool = True, fit=None) -> RunSummary:
     """Run (a shard of) the benchmark; see the module docstring.
 

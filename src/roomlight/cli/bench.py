@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import click
 
-from roomlight.cli.common import RESOLUTION, RoomlightGroup
+from roomlight.bench.builder import BenchConfig
+from roomlight.bench.runner import DEFAULT_EVAL_SPP
+from roomlight.cli.common import RESOLUTION, RoomlightGroup, default_of, parse_sets
+from roomlight.inverse.config import FIT_PRESETS
 
 #: ``--paper`` settings of ``bench make`` (supplementary "Synthetic scene design").
 PAPER_MAKE = {"emitter_height": 512, "width": 1000, "height": 1000, "spp": 4096}
@@ -38,15 +41,16 @@ def command():
 @click.option("--seed", type=int, default=0, show_default=True, help="Base seed of the placements.")
 @click.option("--paper", is_flag=True, help="The paper's settings: emitter 512x1024, images 1000x1000, 4096 spp.")
 @click.option("--emitter-res", "emitter_height", type=int, default=None,
-              help="Emitter height H (width 2H) the panoramas are resampled to [default: 128].")
-@click.option("--res", type=RESOLUTION, default=None, help="Image size WIDTHxHEIGHT [default: 128x128].")
-@click.option("--spp", type=int, default=None, help="Samples per pixel of the ground-truth renders [default: 256].")
-@click.option("--fov", type=float, default=None, help="Horizontal field of view in degrees [default: 65].")
-@click.option("--materials", default=None, help="Comma-separated materials [default: diffuse,matte,mirror].")
+              help=f"Emitter height H (width 2H) the panoramas are resampled to {default_of(BenchConfig, 'emitter_height')}.")
+@click.option("--res", type=RESOLUTION, default=None,
+              help=f"Image size HxW [default: {BenchConfig.height}x{BenchConfig.width}].")
+@click.option("--spp", type=int, default=None, help=f"Samples per pixel of the ground-truth renders {default_of(BenchConfig, 'spp')}.")
+@click.option("--fov", type=float, default=None, help=f"Horizontal field of view in degrees {default_of(BenchConfig, 'fov')}.")
+@click.option("--materials", default=None, help=f"Comma-separated materials [default: {','.join(BenchConfig.materials)}].")
 @click.option("--shapes", default=None,
               help="Comma-separated input-view shapes: built-in names or .ply/.obj files; more than two: "
-                   "two are drawn per panorama [default: knot,spiky].")
-@click.option("--key", type=float, default=None, help="Exposure key: objects' log-average luminance [default: 0.18].")
+                   f"two are drawn per panorama [default: {','.join(BenchConfig.shapes)}].")
+@click.option("--key", type=float, default=None, help=f"Exposure key: objects' log-average luminance {default_of(BenchConfig, 'key')}.")
 @click.option("--overwrite", is_flag=True, help="Rebuild panoramas that are already built.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, materials, shapes, key, overwrite, quiet):
@@ -56,12 +60,12 @@ def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, material
     8-bit renders of the input and evaluation views, and masks; and OUT/manifest.json. An
     interrupted build resumes where it stopped.
     """
-    from roomlight.bench.builder import BenchConfig, make_benchmark
+    from roomlight.bench.builder import make_benchmark
 
     cfg = BenchConfig(n=n, seed=seed)
     if paper:
         cfg = cfg.override(**PAPER_MAKE)
-    width, height = res if res else (None, None)
+    height, width = res if res else (None, None)
     cfg = cfg.override(emitter_height=emitter_height, width=width, height=height, spp=spp, fov=fov,
                        materials=_csv(materials), shapes=_csv(shapes), key=key)
     manifest = make_benchmark(panos, out_dir, cfg, overwrite=overwrite, progress=not quiet)
@@ -76,12 +80,13 @@ def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, material
               help="Comma-separated methods [default: all]; 'oracle' re-renders the true emitter (noise floor).")
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior (run folder or checkpoint) for the prior methods.")
-@click.option("--preset", default="paper", show_default=True, help="Fit preset: paper (500 it, 64 spp) or fast.")
+@click.option("--preset", type=click.Choice(list(FIT_PRESETS)), default="paper", show_default=True,
+              help="Fit preset: paper (the paper's settings) or fast (CPU-friendly); see `roomlight fit --help`.")
 @click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
 @click.option("--fit-spp", type=int, default=None, help="Override: samples per pixel per fitting step.")
 @click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
               help="Override any fit setting, e.g. --set lr=0.05 (repeatable).")
-@click.option("--eval-spp", type=int, default=None, help="Samples per pixel of the scoring re-renders [default: 256].")
+@click.option("--eval-spp", type=int, default=None, help=f"Samples per pixel of the scoring re-renders [default: {DEFAULT_EVAL_SPP}].")
 @click.option("--paper", is_flag=True, help="Score at the paper's 4096 spp.")
 @click.option("--shard", default=None, metavar="I/N", help="Run only cases I, I+N, I+2N, ... (0 <= I < N).")
 @click.option("--quiet", is_flag=True, help="No progress bars.")
@@ -91,34 +96,27 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
     Each case writes OUT/cases/<panorama>/<material>/<method>/result.json; finished cases are
     skipped, so re-running resumes. Failed cases are reported and retried on the next run.
     """
-    import yaml
-
     from roomlight.bench.runner import parse_shard, run_benchmark
     from roomlight.inverse import fit_config
 
-    overrides = {"iterations": iterations, "spp": fit_spp}
-    for s in sets:
-        if "=" not in s:
-            raise click.BadParameter(f"expected FIELD=VALUE, got {s!r}", param_hint="--set")
-        k, v = s.split("=", 1)
-        overrides[k.strip().replace("-", "_")] = yaml.safe_load(v)
-    cfg = fit_config(preset, **{k: v for k, v in overrides.items() if v is not None})
+    cfg = fit_config(preset, iterations=iterations, spp=fit_spp, **parse_sets(sets))
     method_list = _csv(methods)
     from roomlight.bench.runner import known_methods
+    from roomlight.inverse.methods import needs_prior
 
-    needs_prior = [m for m in (method_list or known_methods()) if m.startswith("prior")]
+    with_prior = [m for m in (method_list or known_methods()) if needs_prior(m)]
     prior = None
-    if needs_prior:
+    if with_prior:
         if model is None:
-            raise click.UsageError(f"methods {', '.join(needs_prior)} need --model (a trained prior); "
+            raise click.UsageError(f"methods {', '.join(with_prior)} need --model (a trained prior); "
                                    "or choose --methods without them")
         from roomlight.render.variant import torch_device
-        from roomlight.train.checkpoint import load_run_model
+        from roomlight.model.runs import load_run_model
 
         # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
         # on the device Mitsuba renders on, so decoded maps reach the renderer without copies
         prior = load_run_model(model, device=torch_device())
-    spp = eval_spp if eval_spp is not None else (PAPER_EVAL_SPP if paper else 256)
+    spp = eval_spp if eval_spp is not None else (PAPER_EVAL_SPP if paper else DEFAULT_EVAL_SPP)
     summary = run_benchmark(bench, out_dir, method_list, cfg, prior, eval_spp=spp, shard=parse_shard(shard),
                             progress=not quiet)
     click.echo(f"bench run: {len(summary.done)} done, {len(summary.skipped)} already done, "

@@ -1,6 +1,8 @@
-"""Shared pieces of the command-line interface: argument types and error reporting."""
+"""Shared pieces of the command-line interface: argument types, ``--set``, defaults and error reporting."""
 
 from __future__ import annotations
+
+import json
 
 import click
 
@@ -25,21 +27,72 @@ class Vec3(click.ParamType):
 
 
 class Resolution(click.ParamType):
-    """``WIDTHxHEIGHT`` for images or ``HxW`` for panoramas (the option's help says which)."""
+    """``HxW``: height, then width, in pixels (``256x512``); a single number ``N`` means ``NxN``.
 
-    name = "AxB"
+    Every ``--res`` of the command line means this, images and panoramas alike (a panorama's W is
+    2H). Returns ``(height, width)``.
+    """
+
+    name = "HxW"
 
     def convert(self, value, param, ctx):
         if isinstance(value, tuple):
             return value
+        text = str(value).lower().strip()
         try:
-            a, b = str(value).lower().split("x")
-            a, b = int(a), int(b)
-            if a <= 0 or b <= 0:
+            h, w = text.split("x") if "x" in text else (text, text)
+            h, w = int(h), int(w)
+            if h <= 0 or w <= 0:
                 raise ValueError
-            return a, b
+            return h, w
         except ValueError:
-            self.fail(f"expected two positive integers like 256x256, got {value!r}", param, ctx)
+            self.fail(f"expected HEIGHTxWIDTH like 128x256 (or one number for a square), got {value!r}", param, ctx)
+
+
+def parse_sets(items, option: str = "--set") -> dict:
+    """``FIELD=VALUE`` strings of a repeatable ``--set`` option -> ``{field: value}``.
+
+    Values are JSON when they parse (numbers, ``true``, ``[64, 128]``, ``null``), else YAML's
+    plain scalars (``True``, ``[64,128]``), else the string itself. Dashes in a name become
+    underscores; ``a.b=VALUE`` sets entry ``b`` of the nested mapping ``a`` (``--set loss.peak=0``).
+    Every command with ``--set`` uses this, and the settings class then refuses unknown names.
+    """
+    out: dict = {}
+    for item in items:
+        key, sep, raw = str(item).partition("=")
+        key = key.strip().replace("-", "_")
+        if not sep or not key:
+            fail(f"{option} {item!r}: expected FIELD=VALUE, e.g. {option} lr=0.05")
+        out_key, _, sub = key.partition(".")
+        value = _parse_value(raw)
+        if sub:
+            out.setdefault(out_key, {})[sub] = value
+        else:
+            out[key] = value
+    return out
+
+
+def _parse_value(raw: str):
+    try:
+        return json.loads(raw)
+    except json.JSONDecodeError:
+        pass
+    import yaml
+
+    try:
+        value = yaml.safe_load(raw)
+    except yaml.YAMLError:
+        return raw
+    return value if isinstance(value, (bool, int, float, list)) else raw
+
+
+def default_of(cls, name: str) -> str:
+    """``[default: VALUE]`` for a help string, read from the settings dataclass ``cls`` (the class
+    attribute a dataclass field with a plain default leaves behind), so help never restates it."""
+    value = getattr(cls, name)
+    if isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, int) for v in value):
+        value = f"{value[0]}x{value[1]}"
+    return f"[default: {value}]"
 
 
 VEC3 = Vec3()

@@ -31,8 +31,8 @@ def command(model_path, data_dir, split, fit_steps, depth_only, limit, batch_siz
     from roomlight.data import PanoramaDataset, split_files
     from roomlight.data.splits import find_panoramas, has_split_folders
     from roomlight.eval.prior import evaluate_prior, report_markdown, write_report
-    from roomlight.fit import FitConfig
-    from roomlight.train.checkpoint import load_run_model, resolve_run_model
+    from roomlight.fit import LatentFitConfig
+    from roomlight.model.runs import load_run_model, resolve_run_model
 
     model = load_run_model(model_path)
     if split == "auto":
@@ -45,7 +45,7 @@ def command(model_path, data_dir, split, fit_steps, depth_only, limit, batch_siz
     files = files[:limit] if limit else files
     units = model.metadata.get("depth_units", "metres")
     ds = PanoramaDataset(files, model.config.resolution, root=data_dir, calibrate=True, depth_units=units)
-    fit = FitConfig(steps=fit_steps) if fit_steps > 0 else None
+    fit = LatentFitConfig(steps=fit_steps) if fit_steps > 0 else None
     report = evaluate_prior(model, ds, fit, batch_size=batch_size, depth_only_fit=depth_only,
                             note=lambda m: click.echo(m, err=True))
     report.update({"model": str(resolve_run_model(model_path)), "data": str(data_dir), "split": split})

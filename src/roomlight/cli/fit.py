@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import click
 
-from roomlight.inverse.config import FIT_PRESETS
-from roomlight.inverse.methods import METHODS
+from roomlight.cli.common import default_of, parse_sets
+from roomlight.inverse.config import FIT_PRESETS, FitConfig
+from roomlight.inverse.methods import METHODS, needs_prior
+
+_FAST = FIT_PRESETS["fast"]
 
 
 @click.command("fit")
@@ -18,24 +21,27 @@ from roomlight.inverse.methods import METHODS
               help="Trained prior for the prior methods: a model folder, a training run (uses its best/) "
                    "or the authors' run folder.")
 @click.option("--preset", type=click.Choice(list(FIT_PRESETS)), default="paper", show_default=True,
-              help="paper: the paper's settings (500 it, 64 spp); fast: a CPU-friendly setting.")
+              help=f"paper: the paper's settings ({FitConfig.iterations} it, {FitConfig.spp} spp); fast: a CPU-friendly "
+                   f"setting ({_FAST.iterations} it, {_FAST.spp} spp).")
 @click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
 @click.option("--spp", type=int, default=None, help="Override: samples per pixel per step.")
 @click.option("--lr", type=float, default=None, help="Override: Adam learning rate.")
 @click.option("--seed", type=int, default=None, help="Override: base seed.")
-@click.option("--view", default=None, help="Scene view to fit (default: input).")
+@click.option("--view", default=None, help=f"Scene view to fit {default_of(FitConfig, 'view')}.")
 @click.option("--image", type=click.Choice(["ldr", "hdr"]), default=None,
-              help="Fit the 8-bit recording (ldr, default) or the linear EXR (hdr).")
-@click.option("--margin", type=float, default=None, help="Repulsion margin in metres (default 0.05).")
-@click.option("--lambda-rep", type=float, default=None, help="Repulsion weight (default 0.1).")
-@click.option("--lambda-log", type=float, default=None, help="Log-term weight (default 0.1).")
+              help=f"Fit the 8-bit recording (ldr) or the linear EXR (hdr) {default_of(FitConfig, 'image')}.")
+@click.option("--margin", type=float, default=None, help=f"Repulsion margin in metres {default_of(FitConfig, 'margin')}.")
+@click.option("--lambda-rep", type=float, default=None, help=f"Repulsion weight {default_of(FitConfig, 'lambda_rep')}.")
+@click.option("--lambda-log", type=float, default=None, help=f"Log-term weight {default_of(FitConfig, 'lambda_log')}.")
 @click.option("--z-prior", type=float, default=None, help="Gaussian prior weight on the latent (real photos).")
 @click.option("--fit-depth-scale", is_flag=True, default=None, help="Also fit a global scale of the decoded depth.")
 @click.option("--pixel-subset", type=float, default=None, help="Fraction of object pixels in the loss per step.")
 @click.option("--whole-frame", "crop_to_mask", flag_value=False, default=None,
               help="Render every pixel each step (default: only the mask's bounding box, which the loss sees).")
+@click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
+              help="Override any fit setting (docs/inverse-rendering.md), e.g. --set eval_every=5 (repeatable).")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def command(scene, method, out_dir, model, preset, quiet, **overrides):
+def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     """Fit the illumination of SCENE (a scene.json/.yaml or its directory) with --method.
 
     Writes to --out: panorama.exr (recovered radiance + depth), emitter/ (PLY + Mitsuba XML),
@@ -46,13 +52,13 @@ def command(scene, method, out_dir, model, preset, quiet, **overrides):
     from roomlight.scene import load_scene
 
     spec = load_scene(scene)
-    cfg = fit_config(preset, **{k: v for k, v in overrides.items() if v is not None})
+    cfg = fit_config(preset, **{**overrides, **parse_sets(sets)})
     prior = None
-    if method.startswith("prior"):
+    if needs_prior(method):
         if model is None:
             raise click.UsageError(f"--method {method} needs --model (a trained prior)")
         from roomlight.render.variant import torch_device
-        from roomlight.train.checkpoint import load_run_model
+        from roomlight.model.runs import load_run_model
 
         # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
         # on the device Mitsuba renders on, so decoded maps reach the renderer without copies

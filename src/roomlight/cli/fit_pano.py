@@ -43,10 +43,10 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out
     from roomlight.data.dataset import load_training_pair
     from roomlight.emitter.export import export_emitter
     from roomlight.eval.prior import panorama_metrics
-    from roomlight.fit import FitConfig, fit_latent
+    from roomlight.fit import LatentFitConfig, fit_latent
     from roomlight.io import save_png, write_panorama
-    from roomlight.train.checkpoint import load_run_model
-    from roomlight.train.panels import training_panel
+    from roomlight.model.runs import load_run_model
+    from roomlight.eval.panels import training_panel
 
     model = load_run_model(model_path)
     device = next(model.parameters()).device
@@ -57,7 +57,7 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out
         target = "both" if dep is not None else "radiance"
     if target != "radiance" and dep is None:
         fail(f"{pano}: --target {target} needs depth; pass --depth FILE or use --target radiance")
-    cfg = FitConfig(steps=steps, lr=lr, lr_final=lr_final, target=target, init_from_encoder=init == "encoder")
+    cfg = LatentFitConfig(steps=steps, lr=lr, lr_final=lr_final, target=target, init_from_encoder=init == "encoder")
     rad_b = rad[None].to(device)
     dep_b = dep[None].to(device) if dep is not None else None
     bar = tqdm(total=steps, desc="fit-pano", unit="step")

@@ -16,7 +16,7 @@ from roomlight.cli.common import RESOLUTION, VEC3
 @click.option("--look-at", "target", type=VEC3, default="0,0,-1", show_default=True, help="Point the camera looks at.")
 @click.option("--up", type=VEC3, default="0,1,0", show_default=True, help="Camera up vector.")
 @click.option("--fov", type=float, default=65.0, show_default=True, help="Horizontal field of view (degrees).")
-@click.option("--res", "res", type=RESOLUTION, default="256x256", show_default=True, help="Image size WIDTHxHEIGHT.")
+@click.option("--res", "res", type=RESOLUTION, default="256x256", show_default=True, help="Image size HxW.")
 @click.option("--spp", type=int, default=64, show_default=True, help="Samples per pixel.")
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("--max-depth", type=int, default=4, show_default=True, help="Longest light path (bounces + 1).")
@@ -41,7 +41,7 @@ def command(scene, out_dir, origin, target, up, fov, res, spp, seed, max_depth, 
     probes = [parse_probe(s) for s in spheres]
     if spp <= 0:
         raise click.BadParameter("must be positive", param_hint="--spp")
-    width, height = res
+    height, width = res
     sensor = perspective_sensor(origin, target, up, fov, width, height)
     img = render_bundle(scene, sensor, probes, spp=spp, seed=seed, max_depth=max_depth)
     out = Path(out_dir)
@@ -49,4 +49,4 @@ def command(scene, out_dir, origin, target, up, fov, res, spp, seed, max_depth, 
     arr = img.numpy()
     write_exr(out / f"{name}.exr", {"R": arr[..., 0], "G": arr[..., 1], "B": arr[..., 2]}, half=False)
     save_png(out / f"{name}.png", tonemap_gamma(arr, exposure_stops=exposure))
-    click.echo(f"rendered {width}x{height} at {spp} spp -> {out / (name + '.exr')}, {out / (name + '.png')}")
+    click.echo(f"rendered {height}x{width} (HxW) at {spp} spp -> {out / (name + '.exr')}, {out / (name + '.png')}")

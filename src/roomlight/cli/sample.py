@@ -13,7 +13,7 @@ def _encode_file(model, path, fit_steps: int):
     import torch
 
     from roomlight.data.dataset import load_training_pair
-    from roomlight.fit import FitConfig, fit_latent
+    from roomlight.fit import LatentFitConfig, fit_latent
 
     device = next(model.parameters()).device
     rad, dep, _ = load_training_pair(path, model.config.resolution, calibrate=True,
@@ -21,7 +21,7 @@ def _encode_file(model, path, fit_steps: int):
     with torch.no_grad():
         z = model.encode(rad[None].to(device), dep[None].to(device)).mean
     if fit_steps > 0:
-        z = fit_latent(model, rad[None].to(device), dep[None].to(device), FitConfig(steps=fit_steps), z0=z).z
+        z = fit_latent(model, rad[None].to(device), dep[None].to(device), LatentFitConfig(steps=fit_steps), z0=z).z
     return z[0].cpu()
 
 
@@ -64,7 +64,7 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
     from roomlight.eval.samples import (decode_latents, interpolate_latents, probe_layout, render_probes,
                                         sample_latents)
     from roomlight.io import write_exr, write_panorama
-    from roomlight.train.checkpoint import load_run_model
+    from roomlight.model.runs import load_run_model
 
     model = load_run_model(model_path)
     out = Path(out_dir)

@@ -6,29 +6,8 @@ import json
 
 import click
 
-from roomlight.cli.common import fail
+from roomlight.cli.common import parse_sets
 from roomlight.train.config import TRAIN_PRESETS
-
-
-def parse_overrides(items) -> dict:
-    """``FIELD=VALUE`` strings -> dict; values are JSON when they parse (numbers, true, lists), else strings.
-
-    ``loss.NAME=VALUE`` sets one entry of the loss configuration.
-    """
-    out: dict = {}
-    for item in items:
-        key, sep, raw = item.partition("=")
-        if not sep or not key:
-            fail(f"--set {item!r}: expected FIELD=VALUE, e.g. --set lr=1e-4 or --set loss.peak=0")
-        try:
-            value = json.loads(raw)
-        except json.JSONDecodeError:
-            value = raw
-        if key.startswith("loss."):
-            out.setdefault("loss", {})[key[5:]] = value
-        else:
-            out[key] = value
-    return out
 
 
 @click.command("train")
@@ -71,7 +50,7 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
                                        num_workers=num_workers).items() if v is not None}
     if no_cache:
         overrides["cache"] = False
-    overrides.update(parse_overrides(sets))
+    overrides.update(parse_sets(sets))
     cfg = get_train_preset(preset).replace(**overrides)
     if print_config:
         click.echo(json.dumps(cfg.to_dict(), indent=2))

@@ -1,7 +1,7 @@
-"""The training dataset: a folder of panorama EXRs at the training resolution (issue 3, part 5).
+"""The training dataset: a folder of panorama EXRs at the training resolution (docs/training.md).
 
 Each item is one panorama as the prior sees it before normalisation: linear radiance, exposure
-calibrated (DESIGN.md §1), and radial depth, both resampled to the training resolution.
+calibrated (docs/conventions.md), and radial depth, both resampled to the training resolution.
 Accepted files are roomlight's EXRs (``R, G, B, Z``) and the paper authors' 4-channel EXRs
 (``R, G, B, A`` with depth in ``A``), read through :func:`roomlight.io.read_panorama`.
 

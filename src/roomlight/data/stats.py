@@ -1,4 +1,4 @@
-"""Dataset statistics: the prior's normalisation (issue 4, part 3) and a summary of the data.
+"""Dataset statistics: the prior's normalisation (docs/model.md) and a summary of the data.
 
 The normalisation statistics are the per-channel mean and standard deviation of
 (log1p R, log1p G, log1p B, log D) over every pixel of the training panoramas, computed at the
@@ -13,6 +13,7 @@ import math
 import numpy as np
 import torch
 
+from roomlight.color import luminance_torch
 from roomlight.errors import RoomlightError
 from roomlight.model.normalization import Normalization
 
@@ -50,8 +51,6 @@ def dataset_statistics(dataset, progress: bool = True, sample_pixels: int = 4096
     in the dataset's depth units) and ``skipped`` (name, reason) pairs. Percentiles use a fixed
     random subset of ``sample_pixels`` pixels per panorama (plus each panorama's maximum).
     """
-    from roomlight.losses.peak import luminance
-
     skipped: list = []
     lum_samples, depth_samples, stops, maxima = [], [], [], []
     dmin, dmax = math.inf, 0.0
@@ -62,7 +61,7 @@ def dataset_statistics(dataset, progress: bool = True, sample_pixels: int = 4096
         nonlocal dmin, dmax
         for it in _good_items(dataset, skipped, progress, "statistics"):
             rad, dep = it["radiance"], it["depth"]
-            y = luminance(rad[None])[0, 0].flatten()
+            y = luminance_torch(rad).flatten()
             d = dep.flatten()
             idx = torch.randint(0, y.numel(), (min(sample_pixels, y.numel()),), generator=g)
             lum_samples.append(y[idx])

@@ -1,4 +1,4 @@
-"""The 2.5D area light (paper §3.1, DESIGN.md §2): an emissive triangle mesh from (radiance, depth).
+"""The 2.5D area light (paper §3.1; docs/conventions.md): an emissive triangle mesh from (radiance, depth).
 
 Vertices sit at p = D(u, v) * omega(u, v) for every pixel centre. The quad grid between
 neighbouring pixels is split into two triangles; a duplicated seam column (u = 1 + 0.5/W,

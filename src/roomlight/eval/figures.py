@@ -7,15 +7,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from roomlight.color import display_to_uint8, to_display_at_key
+
 __all__ = ["samples_figure", "interpolation_strip"]
 
 
 def _ldr_uint8(radiance_chw: torch.Tensor, reference_chw: torch.Tensor | None = None) -> np.ndarray:
-    from roomlight.eval.metrics import to_ldr
-
     ref = None if reference_chw is None else reference_chw[None].float()
-    ldr = to_ldr(radiance_chw[None].float(), reference=ref)[0]
-    return np.rint(ldr.permute(1, 2, 0).numpy() * 255).astype(np.uint8)
+    return display_to_uint8(to_display_at_key(radiance_chw[None].float(), reference=ref)[0])
 
 
 def samples_figure(path: str | Path, radiance: torch.Tensor, depth: torch.Tensor,

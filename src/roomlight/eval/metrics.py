@@ -1,6 +1,6 @@
 """Panorama reconstruction metrics of the prior evaluation (paper Tab. 1).
 
-- LDR: radiance is tone-mapped with :func:`to_ldr` (exposure so that the *target's* log-average
+- LDR: radiance is tone-mapped with :func:`roomlight.color.to_display_at_key` (exposure so that the *target's* log-average
   luminance is 0.18, clip to [0, 1], gamma 2.2; the prediction uses the target's exposure), then
   :func:`psnr` (data range 1) and :func:`ssim`.
 - HDR: :func:`psnr_hdr` on linear radiance, with the target's maximum as the peak signal.
@@ -16,43 +16,27 @@ as in the paper's protocol.
 
 from __future__ import annotations
 
-
 import torch
 import torch.nn.functional as F
 
+from roomlight.color import MIDDLE_GREY, log_average_torch, luminance_torch, to_display_at_key
 from roomlight.errors import ShapeError
-from roomlight.losses.peak import luminance
 
 __all__ = ["LDR_KEY", "log_average_luminance", "to_ldr", "psnr", "psnr_hdr", "ssim", "abs_rel",
            "peak_error_stops", "peak_contrast", "gaussian_window"]
 
 #: Log-average luminance the LDR mapping exposes to ("middle grey").
-LDR_KEY = 0.18
+LDR_KEY = MIDDLE_GREY
+#: The evaluation's LDR mapping under its old name (auto-exposed; compare ``roomlight.color.to_display``).
+to_ldr = to_display_at_key
+#: (B, 3, H, W) linear RGB -> (B,) log-average luminance; see :func:`roomlight.color.log_average_torch`.
+log_average_luminance = log_average_torch
 
 
 def _check(pred: torch.Tensor, target: torch.Tensor, what: str) -> None:
     if pred.shape != target.shape or pred.dim() != 4:
         raise ShapeError(f"{what}: expected two (B, C, H, W) tensors of the same shape, got "
                          f"{tuple(pred.shape)} and {tuple(target.shape)}")
-
-
-def log_average_luminance(radiance: torch.Tensor) -> torch.Tensor:
-    """(B, 3, H, W) linear RGB -> (B,) exp(mean log(Y + 1e-6)) with Rec.709 luminance Y."""
-    return torch.exp(torch.log(luminance(radiance.clamp_min(0.0)).flatten(1) + 1e-6).mean(1))
-
-
-def to_ldr(radiance: torch.Tensor, reference: torch.Tensor | None = None, key: float = LDR_KEY,
-           gamma: float = 2.2) -> torch.Tensor:
-    """Tone-map (B, 3, H, W) linear radiance to [0, 1]: ``clip(x * s, 0, 1) ** (1 / gamma)``.
-
-    ``s = key / log_average_luminance(reference)`` per image; ``reference`` defaults to
-    ``radiance`` itself. Pass the target as reference when mapping a prediction, so that both
-    share one exposure and an exposure error shows in the metrics.
-    """
-    ref = radiance if reference is None else reference
-    s = key / log_average_luminance(ref.double())
-    x = radiance.double() * s.view(-1, 1, 1, 1).to(radiance.device)
-    return x.clamp(0.0, 1.0).pow(1.0 / gamma).to(radiance.dtype)
 
 
 def psnr(pred: torch.Tensor, target: torch.Tensor, data_range: float = 1.0) -> torch.Tensor:
@@ -117,8 +101,8 @@ def peak_error_stops(pred: torch.Tensor, target: torch.Tensor, floor: float = 1e
     pixels are equally bright; 3 when one is 8x the other. Luminances below ``floor`` count as it.
     """
     _check(pred, target, "peak_error_stops")
-    peak_p = luminance(pred.double()).flatten(1).amax(1).clamp_min(floor)
-    peak_t = luminance(target.double()).flatten(1).amax(1).clamp_min(floor)
+    peak_p = luminance_torch(pred.double()).flatten(1).amax(1).clamp_min(floor)
+    peak_t = luminance_torch(target.double()).flatten(1).amax(1).clamp_min(floor)
     return torch.log2(peak_p / peak_t).abs()
 
 
@@ -128,7 +112,7 @@ def peak_contrast(radiance: torch.Tensor) -> torch.Tensor:
     Needs no reference, so it also describes samples: six procedural 64 x 128 rooms measured
     26-162x; a prior whose decoded rooms sit near 2x shows no light sources.
     """
-    lum = luminance(radiance.double()).flatten(1)
+    lum = luminance_torch(radiance.double()).flatten(1)
     return lum.amax(1) / lum.median(1).values.clamp_min(1e-12)
 
 

@@ -1,4 +1,4 @@
-"""Evaluating the prior as a model of panoramas (paper Tab. 1; issue 4, part 6).
+"""Evaluating the prior as a model of panoramas (paper Tab. 1; docs/training.md).
 
 For every panorama of an evaluation set, two reconstructions are scored:
 
@@ -21,8 +21,9 @@ import torch
 
 from roomlight.data.dataset import collate_panoramas
 from roomlight.eval.lpips import load_lpips
-from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim, to_ldr
-from roomlight.fit.latent import FitConfig, fit_latent
+from roomlight.color import to_display_at_key
+from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim
+from roomlight.fit.latent import LatentFitConfig, fit_latent
 
 __all__ = ["METRICS", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
 
@@ -47,8 +48,8 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
     Returns:
         name -> (B,) float64 tensor, names as in :data:`METRICS` (``lpips_ldr`` only with lpips_fn).
     """
-    ldr_t = to_ldr(radiance.float())
-    ldr_p = to_ldr(pred_radiance.float(), reference=radiance.float())
+    ldr_t = to_display_at_key(radiance.float())
+    ldr_p = to_display_at_key(pred_radiance.float(), reference=radiance.float())
     out = {"psnr_ldr": psnr(ldr_p, ldr_t).cpu(), "ssim_ldr": ssim(ldr_p, ldr_t).cpu(),
            "psnr_hdr": psnr_hdr(pred_radiance, radiance).cpu(),
            "peak_stops": peak_error_stops(pred_radiance, radiance).cpu(), "abs_rel": abs_rel(pred_depth, depth).cpu()}
@@ -57,7 +58,7 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
     return out
 
 
-def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), batch_size: int = 8,
+def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFitConfig(), batch_size: int = 8,
                    depth_only_fit: bool = False, progress: bool = True, note=print) -> dict:
     """Score encoder reconstructions and latent fits over ``dataset``.
 
@@ -71,7 +72,7 @@ def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), b
         note: receives messages (skipped files, LPIPS availability).
     Returns:
         ``{"count", "rows": {row: {metric: mean}}, "per_image": [...], "skipped": [...],
-        "lpips": None or reason, "fit": FitConfig dict}``.
+        "lpips": None or reason, "fit": LatentFitConfig dict}``.
     """
     from tqdm import tqdm
 
@@ -84,7 +85,7 @@ def evaluate_prior(model, dataset, fit_config: FitConfig | None = FitConfig(), b
     if fit_config is not None:
         rows["latent fit"] = fit_config
         if depth_only_fit:
-            rows["latent fit (depth only)"] = FitConfig(**{**fit_config.to_dict(), "target": "depth"})
+            rows["latent fit (depth only)"] = fit_config.override(target="depth")
     per_image, skipped = [], []
     values: dict[str, dict[str, list]] = {r: {} for r in rows}
     # The bar counts work units: one per batch for the encoder pass, one per latent-fit step, so a

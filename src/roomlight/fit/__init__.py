@@ -1,10 +1,13 @@
-"""Fitting the prior to observations. So far: latent fitting to a panorama (``roomlight fit-pano``).
+"""Latent fitting: the prior's latent that best reproduces a panorama (``roomlight fit-pano``).
 
-- :class:`FitConfig`, :func:`fit_latent`, :class:`FitResult`
+Not to be confused with :mod:`roomlight.inverse`, which recovers a scene's light from an image
+(``roomlight fit``).
+
+- :class:`LatentFitConfig`, :func:`fit_latent`, :class:`LatentFitResult`
 """
 
 from __future__ import annotations
 
-from roomlight.fit.latent import TARGETS, FitConfig, FitResult, fit_latent
+from roomlight.fit.latent import TARGETS, FitConfig, FitResult, LatentFitConfig, LatentFitResult, fit_latent
 
-__all__ = ["FitConfig", "FitResult", "fit_latent", "TARGETS"]
+__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS", "FitConfig", "FitResult"]

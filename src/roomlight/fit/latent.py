@@ -13,20 +13,21 @@ panorama's mean squared error, so a panorama's fit does not depend on what else 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import torch
 
+from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError, ShapeError
 
-__all__ = ["FitConfig", "FitResult", "fit_latent", "TARGETS"]
+__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS"]
 
 #: Which normalised channels enter the objective.
 TARGETS = {"both": (0, 1, 2, 3), "radiance": (0, 1, 2), "depth": (3,)}
 
 
 @dataclass(frozen=True)
-class FitConfig:
+class LatentFitConfig(StrictConfig):
     """Settings of :func:`fit_latent` (defaults: the paper's protocol)."""
 
     #: Adam iterations.
@@ -41,24 +42,19 @@ class FitConfig:
     target: str = "both"
     #: Start from the encoder's posterior mean instead of z = 0 (needs radiance and depth).
     init_from_encoder: bool = False
-    #: Record the loss every this many steps in :attr:`FitResult.history`.
+    #: Record the loss every this many steps in :attr:`LatentFitResult.history`.
     history_every: int = 10
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
         if self.target not in TARGETS:
-            raise RoomlightError(f"FitConfig.target = {self.target!r}: use one of {sorted(TARGETS)}")
+            raise RoomlightError(f"LatentFitConfig.target = {self.target!r}: use one of {sorted(TARGETS)}")
         if self.steps < 0 or self.lr <= 0 or self.lr_final <= 0:
-            raise RoomlightError("FitConfig: steps must be >= 0 and learning rates > 0")
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["betas"] = list(self.betas)
-        return d
+            raise RoomlightError("LatentFitConfig: steps must be >= 0 and learning rates > 0")
 
 
 @dataclass
-class FitResult:
+class LatentFitResult:
     """Outcome of :func:`fit_latent`.
 
     Attributes:
@@ -91,7 +87,7 @@ def _check_inputs(model, radiance, depth, target):
 
 
 def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
-               config: FitConfig = FitConfig(), z0: torch.Tensor | None = None, callback=None) -> FitResult:
+               config: LatentFitConfig = LatentFitConfig(), z0: torch.Tensor | None = None, callback=None) -> LatentFitResult:
     """Optimise one latent per panorama so that the decoder reproduces it.
 
     Args:
@@ -105,7 +101,7 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
             ``config.init_from_encoder``).
         callback: called as ``callback(step, mean_loss)`` after every step (e.g. a progress bar).
     Returns:
-        :class:`FitResult` with the best iterate per panorama.
+        :class:`LatentFitResult` with the best iterate per panorama.
     """
     _check_inputs(model, radiance, depth, config.target)
     norm = model.normalization
@@ -121,8 +117,12 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
     with torch.no_grad():
         x = norm.normalize(rad.float(), dep.float())[:, channels]
     was_training = model.training
+    # Freeze the decoder for the fit, and give every parameter back the flag it had: a model
+    # that is partly frozen (or being trained elsewhere) must come back exactly as it was.
+    params = list(model.parameters())
+    required = [p.requires_grad for p in params]
     model.eval()
-    for p in model.parameters():
+    for p in params:
         p.requires_grad_(False)
     try:
         if z0 is None and config.init_from_encoder:
@@ -157,7 +157,12 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
         with torch.no_grad():
             out_rad, out_dep = model.decode(best_z)
     finally:
-        for p in model.parameters():
-            p.requires_grad_(True)
+        for p, flag in zip(params, required):
+            p.requires_grad_(flag)
         model.train(was_training)
-    return FitResult(best_z, best_loss, out_rad, out_dep, history)
+    return LatentFitResult(best_z, best_loss, out_rad, out_dep, history)
+
+
+#: Former names, kept importable; ``roomlight.inverse`` has its own ``FitConfig`` / ``FitResult``.
+FitConfig = LatentFitConfig
+FitResult = LatentFitResult

@@ -1,4 +1,4 @@
-"""The equirectangular convention (DESIGN.md §1); this module is the only place that defines it.
+"""The equirectangular convention (docs/conventions.md); this module is the only place that defines it.
 
 A panorama is H x W with W = 2H. Pixel (i, j) has its centre at u = (j + 0.5) / W,
 v = (i + 0.5) / H; azimuth phi = 2 pi u, polar angle theta = pi v, and the direction is

@@ -1,7 +1,7 @@
 """Illumination recovery by inverse rendering: the prior-guided method and the paper's baselines."""
 
 from roomlight.inverse.config import FIT_PRESETS, FitConfig, fit_config
-from roomlight.inverse.fit import FitResult, Fitter
+from roomlight.inverse.fitter import FitResult, Fitter
 from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
 from roomlight.inverse.methods import METHODS, build_fitter, enclosing_sphere_radius, fit_scene, make_light
 from roomlight.inverse.objective import censor, image_loss

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import dataclass
 
+from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
 
 __all__ = ["FitConfig", "FIT_PRESETS", "fit_config"]
 
 
 @dataclass(frozen=True)
-class FitConfig:
+class FitConfig(StrictConfig):
     """Every knob of a fit; the defaults are the paper's settings."""
 
     iterations: int = 500                 #: optimisation steps
@@ -41,17 +42,6 @@ class FitConfig:
     view: str = "input"                   #: the scene view to fit
     image: str = "ldr"                    #: target: 'ldr' (8-bit recording) or 'hdr' (linear EXR)
 
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    def override(self, **changes) -> "FitConfig":
-        """A copy with some fields changed (unknown names are refused)."""
-        names = {f.name for f in fields(self)}
-        bad = sorted(set(changes) - names)
-        if bad:
-            raise RoomlightError(f"fit config: unknown field(s) {', '.join(bad)}; known: {', '.join(sorted(names))}")
-        return replace(self, **{k: v for k, v in changes.items() if v is not None})
-
 
 #: ``paper`` = the paper's settings; ``fast`` = a CPU-friendly setting for benchmarks and demos.
 FIT_PRESETS: dict[str, FitConfig] = {
@@ -61,8 +51,10 @@ FIT_PRESETS: dict[str, FitConfig] = {
 
 
 def fit_config(preset: str = "paper", **overrides) -> FitConfig:
+    """The settings of ``preset`` with some fields changed; an override of None keeps the preset's
+    value (command-line options that were not given arrive as None)."""
     if preset not in FIT_PRESETS:
         raise RoomlightError(f"unknown fit preset {preset!r}; choose one of {', '.join(FIT_PRESETS)}")
-    return FIT_PRESETS[preset].override(**overrides)
+    return FIT_PRESETS[preset].override(**{k: v for k, v in overrides.items() if v is not None})
 
 

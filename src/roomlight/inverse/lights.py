@@ -2,7 +2,7 @@
 
 Each light model turns its parameters into (radiance (H, W, 3), depth (H, W) or None) and the
 emitter kind that shows them (``mesh``, ``envmap`` or ``sphere:R``), plus its own
-regularisers. The fitting loop (:mod:`roomlight.inverse.fit`) does not know which it drives.
+regularisers. The fitting loop (:mod:`roomlight.inverse.fitter`) does not know which it drives.
 
 - :class:`PriorLight`: z in R^latent (init 0) and log-exposure s (init log 0.18), decoded by
   a frozen PanoVAE decoder; shown as the 2.5D area light (``prior``) or at infinity

@@ -17,12 +17,23 @@ import numpy as np
 
 from roomlight.errors import RoomlightError
 from roomlight.inverse.config import FitConfig
-from roomlight.inverse.fit import FitResult, Fitter, mask_window
+from roomlight.inverse.fitter import FitResult, Fitter, mask_window
 from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
 
-__all__ = ["METHODS", "make_light", "enclosing_sphere_radius", "build_fitter", "fit_scene"]
+__all__ = ["METHODS", "PRIOR_METHODS", "needs_prior", "make_light", "enclosing_sphere_radius", "build_fitter",
+           "fit_scene"]
 
-METHODS = ("prior", "prior-envmap", "direct-al", "direct-sphere", "direct-envmap")
+#: Every method, in the table's order, and whether it fits the latent of a trained prior
+#: (and so needs ``--model``) rather than free per-pixel maps.
+_NEEDS_PRIOR = {"prior": True, "prior-envmap": True, "direct-al": False, "direct-sphere": False,
+                "direct-envmap": False}
+METHODS = tuple(_NEEDS_PRIOR)
+PRIOR_METHODS = tuple(m for m, prior in _NEEDS_PRIOR.items() if prior)
+
+
+def needs_prior(method: str) -> bool:
+    """Whether ``method`` needs a trained prior (a PanoVAE); False for unknown names (e.g. the oracle)."""
+    return _NEEDS_PRIOR.get(method, False)
 
 
 def enclosing_sphere_radius(scene, margin: float = 0.2) -> float:
@@ -37,7 +48,7 @@ def make_light(method: str, scene, config: FitConfig, model=None) -> LightModel:
     """The light model of a method (``model``: a PanoVAE, needed by the prior methods)."""
     if method not in METHODS:
         raise RoomlightError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    if method.startswith("prior"):
+    if needs_prior(method):
         if model is None:
             raise RoomlightError(f"method {method!r} needs a trained prior: pass --model RUN_OR_CHECKPOINT")
         return PriorLight(model, envmap=method == "prior-envmap", init_exposure=config.init_exposure,

@@ -1,4 +1,4 @@
-"""Keeping the 2.5D area light out of the objects (paper eq. 10, DESIGN.md §4).
+"""Keeping the 2.5D area light out of the objects (paper eq. 10; docs/inverse-rendering.md).
 
 For an object point q the clearance is g(q) = D(dir q) - |q|: the emitter's depth in q's
 direction (bilinear on the depth map, seam- and pole-continuous) minus q's distance from the

@@ -1,5 +1,5 @@
 """HDR radiance + radial depth panoramas: the :class:`Panorama` record, its files, and
-exposure calibration (DESIGN.md §1).
+exposure calibration (docs/conventions.md).
 
 Accepted inputs of :func:`read_panorama`:
 
@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from roomlight.color import LOG_EPS, luminance_np, luminance_torch
 from roomlight.errors import InputFileError, ShapeError
 from roomlight.io.depth import read_depth
 from roomlight.io.exr import DEPTH_CHANNEL, read_exr_with_header, write_exr
@@ -60,10 +61,6 @@ PANORAMA_EXTENSIONS = (".exr", ".hdr", ".pic")
 METADATA_ATTRIBUTE = "roomlight"
 #: Metadata key of the exposure calibration factor: original radiance = stored * factor.
 EXPOSURE_FACTOR_KEY = "exposure_factor"
-#: Rec.709 / sRGB luminance weights (linear RGB).
-REC709_LUMINANCE = (0.2126, 0.7152, 0.0722)
-#: Added to the luminance before the log in exposure calibration (DESIGN.md §1).
-LOG_EPS = 1e-6
 
 
 @dataclass
@@ -297,22 +294,20 @@ def luminance(radiance):
     Returns:
         numpy (...) or torch (..., H, W), same dtype family as the input.
     """
-    wr, wg, wb = REC709_LUMINANCE
     if is_torch_tensor(radiance):
         if radiance.dim() < 3 or radiance.shape[-3] != 3:
             raise ShapeError(
                 f"luminance: expected a torch tensor (..., 3, H, W), got {tuple(radiance.shape)}"
             )
-        r, g, b = radiance[..., 0, :, :], radiance[..., 1, :, :], radiance[..., 2, :, :]
-        return wr * r + wg * g + wb * b
+        return luminance_torch(radiance)
     a = np.asarray(radiance)
     if a.shape[-1] != 3:
         raise ShapeError(f"luminance: expected a numpy array (..., 3), got {a.shape}")
-    return wr * a[..., 0] + wg * a[..., 1] + wb * a[..., 2]
+    return luminance_np(a)
 
 
 def exposure_calibrate(radiance):
-    """Scale a panorama so that its log-average luminance is 1 (DESIGN.md §1).
+    """Scale a panorama so that its log-average luminance is 1 (docs/conventions.md).
 
     ``factor = exp(mean(log(Y + 1e-6)))`` over all pixels (unweighted), computed in float64;
     returns ``(radiance / factor, factor)``. Undo with :func:`exposure_uncalibrate`.

@@ -19,6 +19,7 @@ import os
 
 import numpy as np
 
+from roomlight.color import DISPLAY_GAMMA, MIDDLE_GREY, display_to_uint8
 from roomlight.io.panorama import luminance
 from roomlight.io.validate import as_numpy_image, as_numpy_map
 
@@ -37,11 +38,7 @@ def _radiance(x) -> np.ndarray:
     return np.asarray(as_numpy_image(x, 3, "radiance"), dtype=np.float64)
 
 
-def _to_uint8(x: np.ndarray) -> np.ndarray:
-    return np.rint(np.clip(x, 0.0, 1.0) * 255.0).astype(np.uint8)
-
-
-def tonemap_gamma(radiance, exposure_stops: float = 0.0, gamma: float = 2.2) -> np.ndarray:
+def tonemap_gamma(radiance, exposure_stops: float = 0.0, gamma: float = DISPLAY_GAMMA) -> np.ndarray:
     """Exposure, clip to [0, 1] and gamma-encode: ``(x * 2**stops) ** (1 / gamma)``.
 
     Args:
@@ -52,10 +49,10 @@ def tonemap_gamma(radiance, exposure_stops: float = 0.0, gamma: float = 2.2) -> 
     x = _radiance(radiance) * (2.0 ** exposure_stops)
     # NaN -> 0 so that a broken pixel is visible as black rather than crashing the cast.
     x = np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=0.0)
-    return _to_uint8(np.clip(x, 0.0, 1.0) ** (1.0 / gamma))
+    return display_to_uint8(np.clip(x, 0.0, 1.0) ** (1.0 / gamma))
 
 
-def auto_exposure_stops(radiance, key: float = 0.18, mask=None) -> float:
+def auto_exposure_stops(radiance, key: float = MIDDLE_GREY, mask=None) -> float:
     """Exposure (stops) that maps the log-average luminance of ``radiance`` to ``key``.
 
     A camera's auto-exposure: with ``tonemap_gamma(x, auto_exposure_stops(x))`` walls and
@@ -158,7 +155,7 @@ def colorize_depth(
     t = np.zeros_like(d)
     t[valid] = np.clip((f(d[valid]) - lo) / span, 0.0, 1.0)
     rgb = matplotlib.colormaps[cmap](t)[..., :3]
-    out = _to_uint8(rgb)
+    out = display_to_uint8(rgb)
     out[~valid] = 0
     return out
 
@@ -181,7 +178,7 @@ def save_radiance_preview(
     path: str | os.PathLike,
     radiance,
     exposure_stops: float = 0.0,
-    gamma: float = 2.2,
+    gamma: float = DISPLAY_GAMMA,
     *,
     operator: str = "gamma",
     white: float | None = None,

@@ -81,7 +81,7 @@ def check_extension(path: str | os.PathLike, allowed: Iterable[str], what: str) 
 
 
 def check_equirect_aspect(path, height: int, width: int, what: str = "panorama") -> None:
-    """Raise unless ``width == 2 * height`` (the equirectangular convention, DESIGN.md §1)."""
+    """Raise unless ``width == 2 * height`` (the equirectangular convention, docs/conventions.md)."""
     if height <= 0 or width != 2 * height:
         raise InputFileError(
             path,
@@ -214,7 +214,7 @@ def is_torch_tensor(x) -> bool:
 def as_numpy_image(x, channels: int = 3, what: str = "image") -> np.ndarray:
     """Return an (H, W, C) numpy array from numpy (H, W, C) or torch (C, H, W) / (1, C, H, W).
 
-    Layouts follow the project convention (DESIGN.md §1): numpy images are channel-last,
+    Layouts follow the project convention (docs/conventions.md): numpy images are channel-last,
     torch tensors channel-first. The dtype is preserved (use ``.astype`` where needed).
     """
     if is_torch_tensor(x):

@@ -14,21 +14,17 @@ import math
 
 import torch
 
+from roomlight.color import luminance_torch
 from roomlight.errors import ShapeError
 from roomlight.losses.l1 import check_same_shape
 
-__all__ = ["REC709_LUMA", "luminance", "top_fraction_mask", "peak_mask", "peak_loss"]
-
-#: Rec.709 / sRGB luminance weights for linear RGB.
-REC709_LUMA = (0.2126, 0.7152, 0.0722)
-
+__all__ = ["luminance", "top_fraction_mask", "peak_mask", "peak_loss"]
 
 def luminance(rgb: torch.Tensor) -> torch.Tensor:
     """Rec.709 luminance of linear RGB: (B, 3, H, W) -> (B, 1, H, W)."""
     if rgb.dim() != 4 or rgb.shape[1] != 3:
         raise ShapeError(f"luminance: expected (B, 3, H, W) linear RGB, got {tuple(rgb.shape)}")
-    w = torch.tensor(REC709_LUMA, dtype=rgb.dtype, device=rgb.device).view(1, 3, 1, 1)
-    return (rgb * w).sum(dim=1, keepdim=True)
+    return luminance_torch(rgb, keepdim=True)
 
 
 def top_fraction_mask(values: torch.Tensor, fraction: float) -> torch.Tensor:

@@ -4,6 +4,7 @@
 - :class:`PanoVAE`                         the network, encode/decode, checkpoints
 - :class:`Normalization`                   log transforms + dataset statistics
 - :class:`DiagonalGaussian`                the posterior q(z | x)
+- :func:`load_run_model`                   ``--model PATH`` (a checkpoint, a training run, the authors' run)
 - :func:`convert_authors_checkpoint`       the authors' ``config.yaml`` + ``.pth`` -> safetensors
 
 See docs/model.md.
@@ -15,16 +16,17 @@ from roomlight.model.config import PRESETS, ModelConfig, get_preset
 from roomlight.model.convert import (
     AUTHORS_NORMALIZATION,
     ThirdPartyCheckpointWarning,
-    convert_authors_checkpoint,
     from_authors_state_dict,
     to_authors_state_dict,
 )
 from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.normalization import Normalization
 from roomlight.model.panovae import Decoder, Encoder, PanoVAE
+from roomlight.model.runs import convert_authors_checkpoint, load_run_model, resolve_run_model
 
 __all__ = [
     "ModelConfig", "PRESETS", "get_preset", "PanoVAE", "Encoder", "Decoder", "Normalization",
     "DiagonalGaussian", "AUTHORS_NORMALIZATION", "ThirdPartyCheckpointWarning",
-    "convert_authors_checkpoint", "from_authors_state_dict", "to_authors_state_dict",
+    "convert_authors_checkpoint", "from_authors_state_dict", "to_authors_state_dict", "load_run_model",
+    "resolve_run_model",
 ]

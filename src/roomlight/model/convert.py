@@ -27,6 +27,7 @@ import torch
 from roomlight.errors import InputFileError, RoomlightError
 from roomlight.model.config import ModelConfig
 from roomlight.model.normalization import Normalization
+from roomlight.model.weights import load_state_dict_checked
 
 __all__ = [
     "AUTHORS_NORMALIZATION",
@@ -36,7 +37,6 @@ __all__ = [
     "from_authors_state_dict",
     "read_authors_config",
     "load_authors_run",
-    "convert_authors_checkpoint",
 ]
 
 #: The authors' hard-coded statistics of (log1p R, log1p G, log1p B, log depth).
@@ -174,17 +174,17 @@ def _find_weights(directory: Path) -> Path:
     )
 
 
-def load_authors_run(path: str | Path, cls=None):
-    """Load the authors' run folder (or its ``.pth`` file) into a :class:`PanoVAE`.
+def load_authors_run(path: str | Path, cls):
+    """Load the authors' run folder (or its ``.pth`` file) into a model of class ``cls``.
+
+    ``cls`` is :class:`roomlight.model.PanoVAE` (or a subclass): it is passed in, rather than
+    imported here, because ``PanoVAE.from_pretrained`` calls this function.
 
     ``config.yaml`` must sit next to the weights. The pickle is loaded on the CPU with
     ``weights_only=True``, which refuses arbitrary objects; a :class:`ThirdPartyCheckpointWarning`
     reminds the caller that it is a third-party pickle nonetheless (convert it once with
-    :func:`convert_authors_checkpoint` and share the safetensors instead).
+    :func:`roomlight.model.runs.convert_authors_checkpoint` and share the safetensors instead).
     """
-    from roomlight.model.panovae import PanoVAE, load_state_dict_checked
-
-    cls = cls or PanoVAE
     path = Path(path)
     directory = path if path.is_dir() else path.parent
     weights = path if path.is_file() and path.suffix in (".pth", ".pt") else _find_weights(directory)
@@ -222,14 +222,3 @@ def load_authors_run(path: str | Path, cls=None):
     state = from_authors_state_dict(state, cfg, str(weights))
     load_state_dict_checked(model, {k: v.float() for k, v in state.items()}, str(weights))
     return model
-
-
-def convert_authors_checkpoint(run_dir: str | Path, out_dir: str | Path) -> Path:
-    """Convert the authors' run folder into a roomlight checkpoint (safetensors + config.json).
-
-    The authors' normalisation and ``depth_units = "scale-free"`` are recorded in the output, so
-    the converted model behaves exactly like the original. Returns ``out_dir``.
-    """
-    model = load_authors_run(run_dir)  # warns that the input is a third-party pickle
-    training = model.metadata.pop("training", None)
-    return model.save_pretrained(out_dir, training_config=training)

@@ -47,15 +47,11 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
     depth = depth.float().to(device) if depth is not None else None
     tex = escene.texture_value(radiance)
     verts = escene.vertex_value(depth)
-    params = escene.params
 
     @dr.wrap(source="torch", target="drjit")
     def _render(tex_dr, verts_dr):
-        params[escene._tex_key] = tex_dr
-        if verts_dr is not None:
-            params[escene._pos_key] = verts_dr.array
-        params.update()
-        return mi.render(escene.scene, params, spp=spp, seed=seed, seed_grad=seed_grad,
+        escene.write_emitter_values(tex_dr, verts_dr.array if verts_dr is not None else None)
+        return mi.render(escene.scene, escene.params, spp=spp, seed=seed, seed_grad=seed_grad,
                          spp_grad=spp_grad or spp, sensor=sensor)
 
     img = _render(tex, verts)

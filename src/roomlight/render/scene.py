@@ -13,19 +13,19 @@ only writes new vertex positions / texture values through ``mi.traverse`` and ca
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import torch
 
 from roomlight.emitter.area_light import area_light_topology, area_light_vertices
 from roomlight.emitter.envmap import envmap_data, envmap_rows
+from roomlight.emitter.kind import EmitterKind, parse_emitter_kind
 from roomlight.emitter.sphere import sphere_depth
 from roomlight.errors import RoomlightError, ShapeError
 from roomlight.render.tensors import from_mitsuba_tensor, to_mitsuba_tensor
 from roomlight.render.variant import mitsuba
 
-__all__ = ["EmitterKind", "parse_emitter_kind", "EmitterScene", "EMITTER_ID", "EMITTER_BSDF"]
+# EmitterKind and parse_emitter_kind live in roomlight.emitter.kind; re-exported for old imports.
+__all__ = ["EmitterScene", "EMITTER_ID", "EMITTER_BSDF", "EmitterKind", "parse_emitter_kind"]
 
 EMITTER_ID = "emitter"
 
@@ -34,35 +34,6 @@ EMITTER_ID = "emitter"
 #: integrator sample a light from every emitter hit (a shadow ray through the whole mesh, for
 #: nothing); a black *delta* BSDF has no smooth component, so paths that reach the emitter end there.
 EMITTER_BSDF = {"type": "conductor", "specular_reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
-
-
-@dataclass(frozen=True)
-class EmitterKind:
-    """Which representation shows the radiance: ``mesh``, ``envmap`` or ``sphere`` (with radius)."""
-
-    name: str
-    radius: float | None = None
-
-    def __str__(self) -> str:
-        return f"sphere:{self.radius:g}" if self.name == "sphere" else self.name
-
-
-def parse_emitter_kind(text: str | EmitterKind) -> EmitterKind:
-    """Parse ``mesh``, ``envmap`` or ``sphere:R`` (R in scene units)."""
-    if isinstance(text, EmitterKind):
-        return text
-    name, _, arg = str(text).partition(":")
-    if name in ("mesh", "envmap") and not arg:
-        return EmitterKind(name)
-    if name == "sphere":
-        try:
-            r = float(arg)
-        except ValueError:
-            r = float("nan")
-        if r > 0:
-            return EmitterKind("sphere", r)
-        raise RoomlightError(f"emitter kind {text!r}: a sphere needs a positive radius, e.g. 'sphere:3.5'")
-    raise RoomlightError(f"emitter kind {text!r}: expected 'mesh', 'envmap' or 'sphere:R'")
 
 
 def _texture_dict(mi, radiance_hwc: np.ndarray) -> dict:
@@ -147,15 +118,39 @@ class EmitterScene:
         return area_light_vertices(depth.reshape(self.resolution)).reshape(-1)
 
     # -- in-place updates and plain (non-differentiable) rendering ---------------------------
+    def write_emitter_values(self, texture, vertices=None) -> None:
+        """Store already-converted values in the scene and update it (no reload).
+
+        Args:
+            texture: the emitter texture as Mitsuba holds it (``mi.TensorXf`` or a Dr.Jit tensor
+                attached to an AD graph): (H, W, 3) for a mesh, (H + 1, W + 2, 3) for an env map
+                (see :meth:`texture_value`).
+            vertices: flat (3N,) vertex positions (``mi.Float``), or None to keep the current
+                ones (see :meth:`vertex_value`).
+        """
+        self.params[self._tex_key] = texture
+        if vertices is not None:
+            if self._pos_key is None:
+                raise RoomlightError(f"EmitterScene: an {self.kind} emitter has no vertices to write")
+            self.params[self._pos_key] = vertices
+        self.params.update()
+
     def set_emitter(self, radiance: torch.Tensor, depth: torch.Tensor | None = None) -> None:
         """Write new radiance (H, W, 3) and depth (H, W) into the scene, without reloading it."""
-        mi = self.mi
         with torch.no_grad():
-            self.params[self._tex_key] = to_mitsuba_tensor(self.texture_value(radiance.float()))
+            tex = to_mitsuba_tensor(self.texture_value(radiance.float()))
             verts = self.vertex_value(depth.float() if depth is not None else None)
-            if verts is not None:
-                self.params[self._pos_key] = mi.Float(verts.numpy())
-        self.params.update()
+        self.write_emitter_values(tex, self.mi.Float(verts.numpy()) if verts is not None else None)
+
+    def cropped_sensor(self, sensor: dict, window: tuple[int, int, int, int]):
+        """A Mitsuba sensor that renders only ``window`` = (x0, y0, width, height) pixels of the
+        film of ``sensor`` (a sensor dict of this scene's camera, see
+        :func:`roomlight.render.camera.cropped_sensor`); pass it as ``sensor=`` to :meth:`render`
+        or to :func:`roomlight.render.bridge.render_differentiable`."""
+        from roomlight.render.camera import cropped_sensor
+
+        x0, y0, w, h = window
+        return self.mi.load_dict(cropped_sensor(sensor, x0, y0, w, h))
 
     def render(self, spp: int = 64, seed: int = 0, sensor: int | object = 0) -> torch.Tensor:
         """Render the current scene; returns (H, W, 3) float32 linear radiance on the CPU."""

@@ -1,4 +1,4 @@
-"""Choosing and activating the Mitsuba variant (DESIGN.md §5).
+"""Choosing and activating the Mitsuba variant (docs/conventions.md, "Mitsuba on CPU machines").
 
 The choice is made in one function, on first use, never at import time: ``cuda_ad_rgb`` when a
 CUDA device is usable, else ``llvm_ad_rgb`` (CPU). ``ROOMLIGHT_VARIANT`` overrides it.

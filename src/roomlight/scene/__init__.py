@@ -1,9 +1,16 @@
-"""Scene descriptions (cameras, objects, materials, views, emitter) and their Mitsuba form."""
+"""Scene descriptions (cameras, objects, materials, views, emitter) and their Mitsuba form.
 
+- :mod:`roomlight.scene.description`  the ``scene.json`` / ``scene.yaml`` format: parse, validate, save
+- :mod:`roomlight.scene.shapes`       the built-in non-convex test shapes
+- :mod:`roomlight.scene.build`        files and Mitsuba objects: ``load_scene`` (reads every file a
+  scene names), meshes, target images and masks, surface points
+"""
+
+from roomlight.scene.build import check_scene_files, load_scene
 from roomlight.scene.description import (
-    CameraSpec, EmitterSpec, MaterialSpec, ObjectSpec, SceneError, SceneSpec, ViewSpec, load_scene, save_scene,
+    CameraSpec, EmitterSpec, MaterialSpec, ObjectSpec, SceneError, SceneSpec, ViewSpec, read_scene, save_scene,
 )
 from roomlight.scene.shapes import BUILTIN_SHAPES, builtin_shape
 
 __all__ = ["CameraSpec", "EmitterSpec", "MaterialSpec", "ObjectSpec", "SceneError", "SceneSpec", "ViewSpec",
-           "load_scene", "save_scene", "BUILTIN_SHAPES", "builtin_shape"]
+           "load_scene", "read_scene", "check_scene_files", "save_scene", "BUILTIN_SHAPES", "builtin_shape"]

@@ -8,10 +8,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from roomlight.scene.description import ObjectSpec, SceneError, SceneSpec, ViewSpec
+from roomlight.color import display_to_linear
+from roomlight.errors import RoomlightError
+from roomlight.scene.description import ObjectSpec, SceneError, SceneSpec, ViewSpec, read_scene
 
-__all__ = ["object_geometry", "mitsuba_object", "view_objects", "object_points", "load_view_target",
-           "scene_points"]
+__all__ = ["load_scene", "check_scene_files", "object_geometry", "mitsuba_object", "view_objects", "object_points",
+           "load_view_target", "scene_points"]
 
 
 @lru_cache(maxsize=64)
@@ -102,7 +104,7 @@ def _read_image(path: Path) -> np.ndarray:
     except Exception as exc:
         raise SceneError(f"{path}: cannot read the image ({exc})") from None
     # 8-bit images are gamma-2.2 encoded, as the benchmark writes them and as cameras roughly do
-    return img ** 2.2
+    return display_to_linear(img)
 
 
 def load_view_target(view: ViewSpec, prefer: str = "ldr") -> tuple[torch.Tensor, torch.Tensor]:
@@ -132,3 +134,34 @@ def load_view_target(view: ViewSpec, prefer: str = "ldr") -> tuple[torch.Tensor,
     else:
         m = np.ones((h, w), bool)
     return torch.from_numpy(img), torch.from_numpy(m)
+
+
+def load_scene(path, check_files: bool = True) -> SceneSpec:
+    """Read and validate a scene description (``.json``, ``.yaml`` or ``.yml``; or its folder).
+
+    With ``check_files`` (default) every referenced file is also read once, so an unreadable
+    panorama, mesh, image or mask is rejected up front with its name.
+    """
+    scene = read_scene(path)
+    if check_files:
+        check_scene_files(scene)
+    return scene
+
+
+def check_scene_files(scene: SceneSpec) -> None:
+    """Read every file a scene names (emitter panorama, meshes, images, masks), so that a corrupt
+    one is reported now, by name, rather than in the middle of a fit."""
+    if scene.emitter is not None:
+        scene.emitter.load()  # raises InputFileError naming the file
+    for obj in scene.objects.values():
+        if obj.mesh is not None:
+            object_geometry(obj)
+    for view in scene.views.values():
+        if view.image is not None or view.ldr is not None:
+            for prefer in ("ldr", "hdr"):
+                try:
+                    load_view_target(view, prefer)
+                except SceneError:
+                    raise
+                except RoomlightError as exc:
+                    raise SceneError(str(exc)) from None

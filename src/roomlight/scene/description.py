@@ -342,33 +342,11 @@ def parse_scene(data: dict, root: Path, where: str = "scene") -> SceneSpec:
                      _get(data, "metadata", where, dict, default={}))
 
 
-def check_scene_files(scene: SceneSpec) -> None:
-    """Read every file a scene names (emitter panorama, meshes, images, masks), so that a corrupt
-    one is reported now, by name, rather than in the middle of a fit."""
-    from roomlight.errors import RoomlightError as _Base
-    from roomlight.scene.build import load_view_target, object_geometry
+def read_scene(path) -> SceneSpec:
+    """Read and validate a scene description (``.json``, ``.yaml`` or ``.yml``; or its folder).
 
-    if scene.emitter is not None:
-        scene.emitter.load()  # raises InputFileError naming the file
-    for obj in scene.objects.values():
-        if obj.mesh is not None:
-            object_geometry(obj)
-    for view in scene.views.values():
-        if view.image is not None or view.ldr is not None:
-            for prefer in ("ldr", "hdr"):
-                try:
-                    load_view_target(view, prefer)
-                except SceneError:
-                    raise
-                except _Base as exc:
-                    raise SceneError(str(exc)) from None
-
-
-def load_scene(path, check_files: bool = True) -> SceneSpec:
-    """Read and validate a scene description (``.json``, ``.yaml`` or ``.yml``).
-
-    With ``check_files`` (default) every referenced file is also read once, so an unreadable
-    panorama, mesh, image or mask is rejected up front with its name.
+    Only the description is checked here; :func:`roomlight.scene.build.load_scene` also reads
+    every file it names.
     """
     p = Path(path)
     if p.is_dir():
@@ -388,10 +366,7 @@ def load_scene(path, check_files: bool = True) -> SceneSpec:
             data = json.loads(text)
     except Exception as exc:
         raise SceneError(f"{p}: not valid {'YAML' if p.suffix.lower() in ('.yaml', '.yml') else 'JSON'}: {exc}") from None
-    scene = parse_scene(data, p.parent, where=p.name)
-    if check_files:
-        check_scene_files(scene)
-    return scene
+    return parse_scene(data, p.parent, where=p.name)
 
 
 def save_scene(scene: SceneSpec, path) -> Path:

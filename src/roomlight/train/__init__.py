@@ -3,7 +3,8 @@
 - :class:`TrainConfig`, :func:`get_train_preset`   the recipe (presets default / small / tiny)
 - :class:`Trainer`                                  ``Trainer(cfg, data, run).fit()``; resumes
 - :func:`learning_rate`                             warm-up + cosine schedule
-- :func:`resolve_run_model`                         ``--model RUN`` -> the model directory
+- :func:`resolve_run_model`                         ``--model RUN`` -> the model directory (from
+  :mod:`roomlight.model.runs`, re-exported)
 
 See docs/training.md.
 """

@@ -23,14 +23,12 @@ from pathlib import Path
 import torch
 
 from roomlight.errors import InputFileError
+# Run folders are read by inference code too, so their layout lives in roomlight.model.runs.
+from roomlight.model.runs import OPTIMIZER_NAME, STATE_NAME, latest_checkpoint, load_run_model, resolve_run_model
 
 __all__ = ["atomic_write_text", "replace_dir", "optimizer_to_tensors", "optimizer_from_tensors",
            "save_training_state", "load_training_state", "latest_checkpoint", "checkpoint_name",
            "prune_checkpoints", "resolve_run_model", "load_run_model"]
-
-STATE_NAME = "trainer_state.json"
-OPTIMIZER_NAME = "optimizer.safetensors"
-
 
 def checkpoint_name(step: int) -> str:
     """Directory name of the checkpoint after ``step`` optimiser steps."""
@@ -137,27 +135,6 @@ def load_training_state(directory: Path, rank: int = 0) -> dict:
             "model_dir": directory}
 
 
-def _complete(d: Path) -> bool:
-    return d.is_dir() and (d / STATE_NAME).exists() and (d / OPTIMIZER_NAME).exists()
-
-
-def latest_checkpoint(run_dir: str | Path) -> Path | None:
-    """The newest complete checkpoint directory of a run, or None."""
-    ckdir = Path(run_dir) / "checkpoints"
-    if not ckdir.is_dir():
-        return None
-    pointer = ckdir / "latest.json"
-    if pointer.exists():
-        try:
-            d = ckdir / json.loads(pointer.read_text())["name"]
-            newest = max((p for p in ckdir.glob("step-*") if _complete(p)), default=None)
-            if _complete(d) and (newest is None or newest.name <= d.name):
-                return d
-        except (OSError, KeyError, json.JSONDecodeError):
-            pass
-    return max((p for p in ckdir.glob("step-*") if _complete(p)), default=None)
-
-
 def prune_checkpoints(run_dir: str | Path, keep: int) -> None:
     """Delete all but the ``keep`` newest periodic checkpoints (and stale temporary directories)."""
     ckdir = Path(run_dir) / "checkpoints"
@@ -166,34 +143,3 @@ def prune_checkpoints(run_dir: str | Path, keep: int) -> None:
         shutil.rmtree(d, ignore_errors=True)
     for tmp in ckdir.glob(".tmp-*"):
         shutil.rmtree(tmp, ignore_errors=True)
-
-
-def resolve_run_model(path: str | Path) -> Path:
-    """Directory to pass to ``PanoVAE.from_pretrained`` for ``--model PATH``.
-
-    ``PATH`` may be a model directory itself (``config.json`` + ``model.safetensors``, or the
-    authors' run folder), or a training run: then ``RUN/best``, else its newest checkpoint.
-    """
-    p = Path(path)
-    if not p.exists():
-        raise InputFileError(p, "no such file or directory", "pass a model directory or a training run")
-    if p.is_file() or (p / "model.safetensors").exists() or (p / "config.yaml").exists():
-        return p
-    for cand in (p / "best", p / "best.old"):
-        if (cand / "model.safetensors").exists():
-            return cand
-    latest = latest_checkpoint(p)
-    if latest is not None:
-        return latest
-    raise InputFileError(p, "holds no model: expected config.json + model.safetensors, a best/ folder "
-                         "or checkpoints/step-*", "train one with `roomlight train` or convert one with "
-                         "`roomlight convert`")
-
-
-def load_run_model(path: str | Path, device: str | None = None):
-    """``PanoVAE.from_pretrained(resolve_run_model(path))`` on ``device`` (default: CUDA if available)."""
-    from roomlight.model import PanoVAE
-
-    if device is None:
-        device = "cuda" if torch.cuda.is_available() else "cpu"
-    return PanoVAE.from_pretrained(resolve_run_model(path), device=device)

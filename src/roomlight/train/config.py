@@ -1,4 +1,4 @@
-"""Training configuration of the prior (supp. "Training details"; DESIGN.md §3).
+"""Training configuration of the prior (supp. "Training details"; docs/training.md).
 
 One dataclass, saved as ``RUN/train_config.json`` and inside every checkpoint. The defaults are
 the paper's recipe; presets ``default``, ``small`` and ``tiny`` pair with the model presets of

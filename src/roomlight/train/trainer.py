@@ -351,7 +351,7 @@ class Trainer:
     def write_images(self, count: int = 4) -> Path | None:
         """Panel of validation inputs, their reconstructions and prior samples (fixed z) to RUN/images."""
         from roomlight.io import save_png
-        from roomlight.train.panels import training_panel
+        from roomlight.eval.panels import training_panel
 
         ds = self.val_set if self.val_set is not None else self.train_set
         batch = collate_panoramas([ds[i] for i in range(min(count, len(ds)))])

@@ -118,12 +118,10 @@ class Fitter:
             self.sensor = 0  # the scene's own sensor: the whole frame
             self.target, self.mask = self.full_target, self.full_mask
         else:
-            from roomlight.render.camera import cropped_sensor
-
             if sensor_dict is None:
                 raise RoomlightError("Fitter: a rendering window needs the view's sensor dict")
             x0, y0, w, h = window
-            self.sensor = escene.mi.load_dict(cropped_sensor(sensor_dict, x0, y0, w, h))
+            self.sensor = escene.cropped_sensor(sensor_dict, window)
             self.target = self.full_target[y0:y0 + h, x0:x0 + w]
             self.mask = self.full_mask[y0:y0 + h, x0:x0 + w]
         self.points = points if (points is not None and light.has_depth and config.lambda_rep > 0) else None
@@ -163,10 +161,47 @@ class Fitter:
             img = self.escene.render(spp=c.eval_spp or c.spp, seed=c.seed + EVAL_SEED_OFFSET, sensor=self.sensor)
             return float(self.terms(img, rad, depth, self.mask)["total"])
 
-    # ------------------------------------------------------------------ loop
-    def run(self, progress: bool = True, history_path: Path | None = None) -> FitResult:
+    # ------------------------------------------------------------------ one step
+    def step(self, it: int) -> dict:
+        """One optimisation step at iteration ``it``: render, loss, backward, clip, Adam.
+
+        A step whose loss or gradient is non-finite leaves the parameters and Adam's moments
+        as they were and is flagged ``skipped_nonfinite``. Returns the iteration's record: the
+        loss terms, ``grad_norm``, ``seconds`` and the light's own description.
+        """
         from roomlight.render.bridge import render_differentiable
 
+        c = self.config
+        t0 = time.perf_counter()
+        record: dict = {}
+        self.optimizer.zero_grad(set_to_none=True)
+        rad, depth = self.light.emitter()
+        seed = c.seed + 2 * it
+        img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1,
+                                    sensor=self.sensor)
+        terms = self.terms(img, rad, depth, self._mask_subset())
+        loss = terms["total"]
+        ok = bool(torch.isfinite(loss))
+        if ok:
+            loss.backward()
+            ok = all(p.grad is None or bool(torch.isfinite(p.grad).all()) for p in self.params)
+        if ok:
+            gnorm = float(torch.nn.utils.clip_grad_norm_(self.params, c.grad_clip))
+            self.optimizer.step()
+        else:
+            # Skip: parameters and Adam's moments stay as they were.
+            self.optimizer.zero_grad(set_to_none=True)
+            gnorm = float("nan")
+            record["skipped_nonfinite"] = True
+        record.update({k: float(v.detach()) for k, v in terms.items()})
+        record.update({"grad_norm": gnorm, "seconds": time.perf_counter() - t0, **self.light.describe()})
+        return record
+
+    # ------------------------------------------------------------------ loop and bookkeeping
+    def run(self, progress: bool = True, history_path: Path | None = None) -> FitResult:
+        """All iterations of :meth:`step`, with the fixed-seed best-iterate checks, the history
+        (``history_path``: one JSON line per iteration), the progress bar and the non-finite
+        guard; ends with the best parameters loaded into the light."""
         c = self.config
         best = (float("inf"), -1, None)
         history: list[dict] = []
@@ -187,45 +222,22 @@ class Fitter:
                     record["fixed_seed_loss"] = value
                     if math.isfinite(value) and value < best[0]:
                         best = (value, it, copy.deepcopy(self.light.state_dict()))
-                if it == c.iterations:
-                    history.append(record)
-                    if log:
-                        log.write(json.dumps(record) + "\n")
-                    break
-                t0 = time.perf_counter()
-                self.optimizer.zero_grad(set_to_none=True)
-                rad, depth = self.light.emitter()
-                seed = c.seed + 2 * it
-                img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1,
-                                            sensor=self.sensor)
-                terms = self.terms(img, rad, depth, self._mask_subset())
-                loss = terms["total"]
-                ok = bool(torch.isfinite(loss))
-                if ok:
-                    loss.backward()
-                    ok = all(p.grad is None or bool(torch.isfinite(p.grad).all()) for p in self.params)
-                if ok:
-                    gnorm = float(torch.nn.utils.clip_grad_norm_(self.params, c.grad_clip))
-                    self.optimizer.step()
-                    in_a_row = 0
-                else:
-                    # Skip: parameters and Adam's moments stay as they were.
-                    self.optimizer.zero_grad(set_to_none=True)
-                    gnorm = float("nan")
-                    nonfinite += 1
-                    in_a_row += 1
-                    record["skipped_nonfinite"] = True
-                    if in_a_row >= MAX_NONFINITE_IN_A_ROW:
-                        raise RoomlightError(
-                            f"fit: {in_a_row} consecutive iterations (up to {it}) gave a non-finite loss or "
-                            "gradient; lower the learning rate or check the target image and scene")
-                record.update({k: float(v.detach()) for k, v in terms.items()})
-                record.update({"grad_norm": gnorm, "seconds": time.perf_counter() - t0, **self.light.describe()})
+                if it < c.iterations:
+                    record.update(self.step(it))
+                    if record.get("skipped_nonfinite"):
+                        nonfinite += 1
+                        in_a_row += 1
+                        if in_a_row >= MAX_NONFINITE_IN_A_ROW:
+                            raise RoomlightError(
+                                f"fit: {in_a_row} consecutive iterations (up to {it}) gave a non-finite loss or "
+                                "gradient; lower the learning rate or check the target image and scene")
+                    else:
+                        in_a_row = 0
                 history.append(record)
                 if log:
                     log.write(json.dumps(record) + "\n")
                     log.flush()
-                if bar:
+                if bar and it < c.iterations:
                     bar.set_postfix(loss=f"{record['total']:.4g}", best=f"{best[0]:.4g}@{best[1]}")
                     bar.update()
         finally:

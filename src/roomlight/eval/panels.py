@@ -1,9 +1,11 @@
-"""Image panels for monitoring training: inputs, reconstructions and prior samples side by side."""
+"""Image panels: inputs, reconstructions and prior samples side by side (training logs, ``fit-pano``)."""
 
 from __future__ import annotations
 
 import numpy as np
 import torch
+
+from roomlight.color import display_to_uint8, to_display_at_key
 
 __all__ = ["panorama_tile", "training_panel"]
 
@@ -16,11 +18,9 @@ def panorama_tile(radiance: torch.Tensor, depth: torch.Tensor) -> np.ndarray:
             luminance to 0.18, gamma 2.2).
         depth: (1, H, W) > 0.
     """
-    from roomlight.eval.metrics import to_ldr
     from roomlight.io.preview import colorize_depth
 
-    ldr = to_ldr(radiance[None].float())[0]  # (3, H, W) in [0, 1]
-    rad = np.rint(ldr.permute(1, 2, 0).numpy() * 255.0).astype(np.uint8)
+    rad = display_to_uint8(to_display_at_key(radiance[None].float())[0])  # (H, W, 3)
     dep = colorize_depth(depth[0].float().numpy(), log=True)
     return np.concatenate([rad, dep], axis=0)
 
