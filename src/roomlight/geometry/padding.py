@@ -1,4 +1,4 @@
-"""Spherical padding for equirectangular feature maps (paper §3.2, DESIGN.md §3).
+"""Spherical padding for equirectangular feature maps (paper §3.2; docs/conventions.md).
 
 Longitude wraps around; beyond each pole the neighbourhood of a pixel is the same latitude
 band half a turn away, so the boundary rows are flipped vertically and rolled by W/2.

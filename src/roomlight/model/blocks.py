@@ -1,4 +1,4 @@
-"""Building blocks of the panoramic VAE (paper §3.2, DESIGN.md §3).
+"""Building blocks of the panoramic VAE (paper §3.2; docs/model.md).
 
 Every 3x3 convolution is *unpadded* and preceded by spherical padding, so features wrap in
 longitude and continue across the poles instead of seeing zeros. Sub-module names (``conv``,

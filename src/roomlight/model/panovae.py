@@ -1,4 +1,4 @@
-"""The panoramic convolutional VAE: the illumination prior (paper §3.2, DESIGN.md §3).
+"""The panoramic convolutional VAE: the illumination prior (paper §3.2; conventions in docs/model.md).
 
 A panorama of HDR radiance + radial depth is encoded into one global latent z (512-d by default)
 and decoded back. Shapes for the default config (B = batch):
@@ -27,6 +27,7 @@ from roomlight.model.blocks import AdaGN, AdaGNResBlock, Downsample, ResBlock, S
 from roomlight.model.config import ModelConfig
 from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.normalization import Normalization
+from roomlight.model.weights import load_state_dict_checked
 
 __all__ = ["Encoder", "Decoder", "PanoVAE", "WEIGHTS_NAME", "CONFIG_NAME", "FORMAT_NAME"]
 
@@ -335,25 +336,3 @@ class PanoVAE(nn.Module):
         state = load_file(str(directory / WEIGHTS_NAME))
         load_state_dict_checked(model, state, str(directory / WEIGHTS_NAME))
         return model
-
-
-def load_state_dict_checked(model: nn.Module, state: dict, source: str) -> None:
-    """``load_state_dict(strict=True)`` with an error that lists the first mismatches."""
-    own = model.state_dict()
-    missing = [k for k in own if k not in state]
-    unexpected = [k for k in state if k not in own]
-    wrong = [f"{k}: expected {tuple(own[k].shape)}, got {tuple(state[k].shape)}"
-             for k in own if k in state and own[k].shape != state[k].shape]
-    if missing or unexpected or wrong:
-        parts = []
-        if missing:
-            parts.append(f"{len(missing)} missing (e.g. {missing[:3]})")
-        if unexpected:
-            parts.append(f"{len(unexpected)} unexpected (e.g. {unexpected[:3]})")
-        if wrong:
-            parts.append(f"{len(wrong)} with wrong shape (e.g. {wrong[:3]})")
-        raise InputFileError(
-            source, "weights do not match the model config: " + "; ".join(parts),
-            "check that the config file belongs to these weights",
-        )
-    model.load_state_dict(state, strict=True)

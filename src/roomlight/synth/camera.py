@@ -1,6 +1,6 @@
 """The equirectangular camera: path-traced radiance and exact radial depth panoramas.
 
-Mitsuba 3 has no spherical sensor, so rays are generated here (DESIGN.md §1 convention via
+Mitsuba 3 has no spherical sensor, so rays are generated here (the convention of docs/conventions.md via
 :func:`roomlight.geometry.pixel_directions`'s formula) and traced with
 ``integrator.sample(scene, sampler, ray)``.
 

@@ -10,17 +10,18 @@ import math
 
 import numpy as np
 
+from roomlight.color import luminance_np
+
 __all__ = ["hsv_albedo", "kelvin_rgb", "light_rgb", "luminance", "srgb_to_linear"]
 
 _XYZ_TO_RGB = np.array([[3.2406, -1.5372, -0.4986],
                         [-0.9689, 1.8758, 0.0415],
                         [0.0557, -0.2040, 1.0570]])
-_Y = np.array([0.2126, 0.7152, 0.0722])
 
 
 def luminance(rgb) -> float:
     """Rec.709 luminance of a linear RGB triple."""
-    return float(np.dot(_Y, np.asarray(rgb, np.float64)))
+    return float(luminance_np(np.asarray(rgb, np.float64)))
 
 
 def _lobe(lam, mu, s1, s2):

@@ -3,7 +3,7 @@
 Sample ``seed`` is the room ``generate_room(seed)`` path-traced from its capture point into an
 equirectangular panorama (radiance, Mitsuba ``path`` integrator through
 :mod:`roomlight.synth.camera`) with exact radial depth (ray intersection at pixel centres). The
-radiance is exposure-calibrated (unit log-average luminance, DESIGN.md §1) and written as
+radiance is exposure-calibrated (unit log-average luminance, docs/conventions.md) and written as
 ``SPLIT/room-SEED.exr`` (R, G, B half — float32 when a value exceeds the half range — + Z float32, metres) with metadata: the calibration factor,
 seed, split, resolution, spp and a summary of the room.
 
@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from roomlight.color import MIDDLE_GREY, luminance_np
 from roomlight.errors import RoomlightError
 
 __all__ = [
@@ -249,7 +250,7 @@ def write_stats(out) -> dict:
     lums, depths, dr_stops, factors, counts = [], [], [], [], {}
     for p in _files(out):
         pano = read_panorama(p)
-        y = 0.2126 * pano.radiance[..., 0] + 0.7152 * pano.radiance[..., 1] + 0.0722 * pano.radiance[..., 2]
+        y = luminance_np(pano.radiance)
         lums.append(np.random.default_rng(0).choice(y.ravel(), size=min(4096, y.size), replace=False))
         depths.append([float(pano.depth.min()), float(pano.depth.max())])
         pos = y[y > 0]
@@ -286,7 +287,7 @@ def contact_sheet(out, count: int = 24, columns: int = 4) -> Path:
     files = _files(out)[:count]
     if not files:
         raise RoomlightError(f"{out}: no samples for a contact sheet")
-    tiles = [tonemap_gamma(read_panorama(p).radiance, exposure_stops=math.log2(0.18)) for p in files]
+    tiles = [tonemap_gamma(read_panorama(p).radiance, exposure_stops=math.log2(MIDDLE_GREY)) for p in files]
     h, w, _ = tiles[0].shape
     rows = math.ceil(len(tiles) / columns)
     sheet = np.zeros((rows * (h + 2), columns * (w + 2), 3), np.uint8)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from roomlight.color import luminance_np
 from roomlight.errors import RoomlightError
 
 __all__ = ["denoise_available", "denoise_panorama", "denoiser_version"]
@@ -105,7 +106,7 @@ def denoise_panorama(radiance: np.ndarray, albedo: np.ndarray, normal: np.ndarra
         raise RoomlightError(f"denoising needs panoramas at least {_PAD} pixels wide, got {w}")
     lights = np.asarray(emitter) > 0
     # OIDN expects HDR values of roughly unit brightness: normalise by the log-average.
-    y = radiance @ np.array([0.2126, 0.7152, 0.0722])
+    y = luminance_np(radiance)
     scale = float(np.exp(np.mean(np.log(y + 1e-6)))) or 1.0
     color = _wrap(_fill(np.asarray(radiance, np.float32) / np.float32(scale), lights))
     out = oidn.denoise(np.ascontiguousarray(color),

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from roomlight.color import luminance_np
 from roomlight.render.variant import mitsuba
 from roomlight.synth.color import luminance
 from roomlight.synth.materials import bsdf_dict, emission_texture
@@ -64,7 +65,7 @@ def _mean_emission(m) -> float:
         from roomlight.synth.textures import make_texture
 
         tex = make_texture(m.emission_texture)
-        lum *= float((tex @ np.array([0.2126, 0.7152, 0.0722])).mean())
+        lum *= float(luminance_np(tex).mean())
     return lum
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from roomlight.color import luminance_np
 from roomlight.errors import RoomlightError
 
 __all__ = ["PATTERNS", "make_texture", "periodic_noise"]
@@ -113,7 +114,7 @@ def _screen(spec, base, rng, n):
     col = np.exp(0.6 * periodic_noise(rng, n, 3.0, 1.0, 3))
     bright = np.exp(0.5 * periodic_noise(rng, n, 2.5, 1.0, 1))
     x = col * bright
-    x /= (x @ np.array([0.2126, 0.7152, 0.0722])).mean()
+    x /= luminance_np(x).mean()
     return x.astype(np.float32)
 
 

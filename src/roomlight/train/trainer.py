@@ -1,4 +1,4 @@
-"""Training loop of the prior (paper §3.3, supp. "Training details"; issue 4, part 5).
+"""Training loop of the prior (paper §3.3, supp. "Training details"; docs/training.md).
 
 ``Trainer(config, data_dir, run_dir).fit()`` trains a :class:`~roomlight.model.PanoVAE` and is
 *exactly* resumable: constructing a Trainer on a run folder that has checkpoints restores the
