@@ -4,7 +4,8 @@
   with 2 CPU threads);
 - training throughput (panoramas / s) of full training steps (forward, the paper's loss,
   backward, AdamW) at batch 32, for every preset (``--presets``), and with ``--compare PRESET``
-  that preset eager, channels-last and compiled, timed alternately in one run;
+  that preset before/after the padding adjoint, channels-last (and compiled with
+  ``--with-compile``), timed alternately in one run;
 - peak memory of a training step at batch 32 (CPU: the process's peak resident set size, in a
   fresh subprocess, minus its size before the step; CUDA: torch.cuda.max_memory_allocated).
 
@@ -136,38 +137,64 @@ def train_step_fn(model, batch: int, device: str, amp: bool, channels_last: bool
     return step
 
 
-def compare_training_variants(preset: str, dev: str, repeats: int, sync) -> list[tuple]:
-    """Training-step time of one preset eager (the reference), with channels-last tensors, and
-    with ``torch.compile`` of the encoder and decoder (the Trainer's ``compile`` option): the
-    same maths, timed round-robin call by call in one run so a busy machine slows all alike.
-    Compilation happens in the warm-up calls and is reported separately."""
-    variants = {}
-    for name in ("eager", "channels_last", "compiled"):
+@contextlib.contextmanager
+def autograd_padding():
+    """Temporarily differentiate spherical padding by autograd through its slice copies (the
+    code before the hand-written adjoint)."""
+    from roomlight.geometry import padding
+
+    saved = padding._SphericalPadFunction.apply
+    padding._SphericalPadFunction.apply = lambda x, pad: padding._pad_forward(x, pad)
+    try:
+        yield
+    finally:
+        padding._SphericalPadFunction.apply = saved
+
+
+def compare_training_variants(preset: str, dev: str, repeats: int, sync, with_compile: bool) -> list[tuple]:
+    """Training-step time of one preset: spherical padding differentiated by autograd (before),
+    with its hand-written adjoint (now), then channels-last tensors and, with ``with_compile``,
+    ``torch.compile`` of the encoder and decoder (the Trainer's ``compile`` option). Same maths;
+    timed round-robin call by call in one run so a busy machine slows all alike. Compilation
+    happens in a warm-up call and is reported separately."""
+    names = ["autograd padding (before)", "hand-written padding adjoint", "channels-last"]
+    names += ["torch.compile"] if with_compile else []
+    steps, contexts = {}, {}
+    for name in names:
+        torch.manual_seed(0)
         m = make_model(preset, dev)
-        if name == "channels_last":
+        if name == "channels-last":
             m = m.to(memory_format=torch.channels_last)
-        if name == "compiled":
+        if name == "torch.compile":
             m.encoder.compile()
             m.decoder.compile()
-        variants[name] = train_step_fn(m, 32, dev, amp=dev == "cuda", channels_last=name == "channels_last")
-    t0 = time.perf_counter()
-    variants["compiled"]()
-    compile_s = time.perf_counter() - t0
-    times = {k: [] for k in variants}
+        steps[name] = train_step_fn(m, 32, dev, amp=dev == "cuda", channels_last=name == "channels-last")
+        contexts[name] = autograd_padding if name.endswith("(before)") else contextlib.nullcontext
+    compile_s = None
+    if with_compile:
+        t0 = time.perf_counter()
+        steps["torch.compile"]()
+        compile_s = time.perf_counter() - t0
+    times = {k: [] for k in names}
     for k in range(repeats + 1):
-        for name, step in variants.items():
-            t0 = time.perf_counter()
-            step()
-            sync()
+        for name in names:
+            with contexts[name]():
+                t0 = time.perf_counter()
+                steps[name]()
+                sync()
             if k:
                 times[name].append(time.perf_counter() - t0)
     med = {k: statistics.median(v) for k, v in times.items()}
     h, w = make_model(preset, "cpu").config.resolution
-    rows = [(f"{preset} {h}x{w} train step, eager (before)", med["eager"] * 1e3, "ms")]
-    for name in ("channels_last", "compiled"):
-        rows.append((f"{preset} {h}x{w} train step, {name.replace('_', '-')}", med[name] * 1e3, "ms"))
-        rows.append((f"  speed-up over eager, same run", med["eager"] / med[name], "x"))
-    rows.append((f"{preset} torch.compile time (first step)", compile_s, "s"))
+    base = med[names[0]]
+    rows = []
+    for name in names:
+        rows.append((f"{preset} {h}x{w} train step, {name}", med[name] * 1e3, "ms"))
+        rows.append((f"  {preset} throughput, {name}", 32 / med[name], "panoramas/s"))
+        if name != names[0]:
+            rows.append(("  speed-up over the first row, same run", base / med[name], "x"))
+    if compile_s is not None:
+        rows.append((f"{preset} torch.compile time (first step)", compile_s, "s"))
     return rows
 
 
@@ -252,8 +279,10 @@ def main():
     ap.add_argument("--presets", default="default,small,compact,lite,tiny",
                     help="comma-separated presets whose training throughput is measured")
     ap.add_argument("--compare", default="", metavar="PRESET",
-                    help="also time this preset's training step eagerly, channels-last and compiled, "
-                         "alternating call by call in one run")
+                    help="also time this preset's training step with padding differentiated by autograd "
+                         "(before), with its adjoint, and channels-last, alternating call by call in one run")
+    ap.add_argument("--with-compile", action="store_true",
+                    help="add torch.compile to --compare (minutes of compilation on a CPU)")
     ap.add_argument("--memory-child", nargs=3, metavar=("PRESET", "BATCH", "THREADS"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.memory_child:
@@ -282,7 +311,7 @@ def main():
         rows.append((f"training throughput {preset} {h}x{w}", batch / t, "panoramas/s"))
         del m, step
     if args.compare and not args.decode_only:
-        rows += compare_training_variants(args.compare, dev, args.repeats, sync)
+        rows += compare_training_variants(args.compare, dev, args.repeats, sync, args.with_compile)
 
     if args.decode_only or "default" not in presets:
         pass  # the memory rows are about the default model's training step

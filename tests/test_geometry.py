@@ -95,6 +95,19 @@ def test_spherical_pad_matches_slow_reference(p):
     assert torch.equal(spherical_pad(x, p), slow_spherical_pad(x, p))
 
 
+@pytest.mark.parametrize("p", [1, 2, 3])
+@pytest.mark.parametrize("h", [3, 6])
+def test_spherical_pad_gradient_equals_autograd_through_the_slow_reference(p, h):
+    """The hand-written adjoint against autograd through the per-pixel reference, and
+    torch.autograd.gradcheck (finite differences) in float64."""
+    x = torch.randn(2, 3, h, 2 * h + 2 * (h % 2), dtype=torch.float64, requires_grad=True)
+    w = torch.randn(2, 3, x.shape[2] + 2 * p, x.shape[3] + 2 * p, dtype=torch.float64)
+    (g,) = torch.autograd.grad((spherical_pad(x, p) * w).sum(), x)
+    (g_ref,) = torch.autograd.grad((slow_spherical_pad(x, p) * w).sum(), x)
+    torch.testing.assert_close(g, g_ref, rtol=0, atol=1e-12)
+    assert torch.autograd.gradcheck(lambda t: spherical_pad(t, p), (x[:1, :1].detach().requires_grad_(),))
+
+
 @pytest.mark.parametrize("p", [1, 2])
 def test_spherical_pad_with_fused_silu_equals_padding_the_activation(p):
     x = torch.randn(2, 3, 6, 12, dtype=torch.float64, requires_grad=True)
