@@ -11,17 +11,21 @@ import click
 @click.option("--model", "model_path", required=True, type=click.Path(exists=True),
               help="Model directory, training run (uses RUN/best) or the authors' run folder.")
 @click.option("--data", "data_dir", required=True, type=click.Path(exists=True, file_okay=False),
-              help="Folder of panoramas with depth (a test/ sub-folder is used when present).")
+              help="Folder of panoramas with depth, or without it with --radiance-only (a test/ sub-folder "
+                   "is used when present).")
 @click.option("--split", type=click.Choice(["auto", "train", "val", "test", "all"]), default="auto", show_default=True,
               help="auto: test/ if the folder has one, else every file.")
 @click.option("--fit-steps", type=int, default=1500, show_default=True,
               help="Latent-fit iterations; 0 skips the fit row.")
 @click.option("--depth-only", is_flag=True, help="Add a depth-only latent-fit row.")
 @click.option("--limit", type=int, default=None, help="Evaluate at most this many panoramas.")
+@click.option("--radiance-only", is_flag=True,
+              help="Panoramas without depth (real captures, .exr or .hdr): fit z to radiance alone and "
+                   "score radiance only (no encoder row: the encoder needs depth).")
 @click.option("--batch-size", type=int, default=8, show_default=True)
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Where eval_prior.md / .json go (default: the --model folder).")
-def command(model_path, data_dir, split, fit_steps, depth_only, limit, batch_size, out_dir):
+def command(model_path, data_dir, split, fit_steps, depth_only, radiance_only, limit, batch_size, out_dir):
     """Reconstruction quality of the prior (paper Tab. 1): encoder pass and latent fit.
 
     Metrics: PSNR and SSIM on tone-mapped LDR (LPIPS too when its weights are available
@@ -44,10 +48,11 @@ def command(model_path, data_dir, split, fit_steps, depth_only, limit, batch_siz
         files = split_files(data_dir)[split]
     files = files[:limit] if limit else files
     units = model.metadata.get("depth_units", "metres")
-    ds = PanoramaDataset(files, model.config.resolution, root=data_dir, calibrate=True, depth_units=units)
+    ds = PanoramaDataset(files, model.config.resolution, root=data_dir, calibrate=True, depth_units=units,
+                         require_depth=not radiance_only)
     fit = LatentFitConfig(steps=fit_steps) if fit_steps > 0 else None
     report = evaluate_prior(model, ds, fit, batch_size=batch_size, depth_only_fit=depth_only,
-                            note=lambda m: click.echo(m, err=True))
+                            note=lambda m: click.echo(m, err=True), radiance_only=radiance_only)
     report.update({"model": str(resolve_run_model(model_path)), "data": str(data_dir), "split": split})
     out = Path(out_dir) if out_dir else Path(model_path)
     if out.is_file():

@@ -110,6 +110,8 @@ class PanoramaDataset(Dataset):
         calibrate, depth_units: see :func:`load_training_pair`.
         cache: an opened :class:`~roomlight.data.cache.PackedCache` holding these files; items
             are then read from it instead of decoding EXRs.
+        require_depth: False accepts radiance-only files (real captures, ``.hdr``); their
+            ``depth`` is None (evaluation of radiance only; training needs depth).
 
     Items are dicts: ``radiance`` (3, H, W) float32 linear, ``depth`` (1, H, W) float32,
     ``name`` (relative path), ``index`` (int); or ``name``, ``index``, ``error`` (str) for a
@@ -117,8 +119,9 @@ class PanoramaDataset(Dataset):
     """
 
     def __init__(self, files, resolution: tuple[int, int], root: str | Path | None = None,
-                 calibrate: bool = True, depth_units: str = "metres", cache=None):
+                 calibrate: bool = True, depth_units: str = "metres", cache=None, require_depth: bool = True):
         self.files = [Path(f) for f in files]
+        self.require_depth = require_depth
         self.resolution = (int(resolution[0]), int(resolution[1]))
         self.root = Path(root) if root is not None else None
         self.calibrate = calibrate
@@ -148,7 +151,8 @@ class PanoramaDataset(Dataset):
                 radiance, depth = decode_pair(self.cache.get(name))
             else:
                 radiance, depth, _ = load_training_pair(self.files[index], self.resolution,
-                                                        self.calibrate, self.depth_units)
+                                                        self.calibrate, self.depth_units,
+                                                        require_depth=self.require_depth)
         except (RoomlightError, OSError, ValueError) as exc:
             # Reported by the collate function; one bad file must not end the epoch.
             return {"name": name, "index": index, "error": str(exc)}
@@ -159,7 +163,8 @@ def collate_panoramas(items: list[dict]) -> dict:
     """Stack good items; list the bad ones.
 
     Returns:
-        ``radiance`` (B, 3, H, W) and ``depth`` (B, 1, H, W) (None when every item was bad),
+        ``radiance`` (B, 3, H, W) and ``depth`` (B, 1, H, W) (None when every item was bad;
+        ``depth`` also None when an item has no depth),
         ``names`` (list of B relative paths), ``indices`` (B,) int64, and ``skipped``: a list of
         (name, reason) for the items that could not be loaded.
     """
@@ -168,9 +173,11 @@ def collate_panoramas(items: list[dict]) -> dict:
     if not good:
         return {"radiance": None, "depth": None, "names": [], "indices": torch.zeros(0, dtype=torch.int64),
                 "skipped": skipped}
+    depths = [it["depth"] for it in good]
     return {
         "radiance": torch.stack([it["radiance"] for it in good]),
-        "depth": torch.stack([it["depth"] for it in good]),
+        # Radiance-only items (depth None) make the whole batch radiance-only.
+        "depth": None if any(d is None for d in depths) else torch.stack(depths),
         "names": [it["name"] for it in good],
         "indices": torch.tensor([it["index"] for it in good], dtype=torch.int64),
         "skipped": skipped,

@@ -19,8 +19,9 @@ from roomlight.errors import InputFileError
 __all__ = ["PANORAMA_SUFFIXES", "SPLIT_NAMES", "find_panoramas", "has_split_folders", "split_files",
            "hash_fraction"]
 
-#: File suffixes that are read as training panoramas (radiance + depth in one EXR).
-PANORAMA_SUFFIXES = (".exr",)
+#: Panorama files a folder is scanned for. Radiance ``.hdr`` files carry no depth: training skips
+#: them by name, ``eval-prior --radiance-only`` uses them.
+PANORAMA_SUFFIXES = (".exr", ".hdr")
 #: Sub-folder names of the split layout.
 SPLIT_NAMES = ("train", "val", "test")
 

@@ -20,6 +20,7 @@ from pathlib import Path
 import torch
 
 from roomlight.data.dataset import collate_panoramas
+from roomlight.errors import RoomlightError
 from roomlight.eval.lpips import load_lpips
 from roomlight.color import to_display_at_key
 from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim
@@ -43,7 +44,8 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
 
     Args:
         pred_radiance, radiance: (B, 3, H, W) linear radiance (same exposure scale).
-        pred_depth, depth: (B, 1, H, W) radial depth, target > 0.
+        pred_depth, depth: (B, 1, H, W) radial depth, target > 0; ``depth`` None (a
+            radiance-only target) leaves ``abs_rel`` out.
         lpips_fn: optional callable from :func:`roomlight.eval.lpips.load_lpips`.
     Returns:
         name -> (B,) float64 tensor, names as in :data:`METRICS` (``lpips_ldr`` only with lpips_fn).
@@ -52,14 +54,17 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
     ldr_p = to_display_at_key(pred_radiance.float(), reference=radiance.float())
     out = {"psnr_ldr": psnr(ldr_p, ldr_t).cpu(), "ssim_ldr": ssim(ldr_p, ldr_t).cpu(),
            "psnr_hdr": psnr_hdr(pred_radiance, radiance).cpu(),
-           "peak_stops": peak_error_stops(pred_radiance, radiance).cpu(), "abs_rel": abs_rel(pred_depth, depth).cpu()}
+           "peak_stops": peak_error_stops(pred_radiance, radiance).cpu()}
+    if depth is not None:
+        out["abs_rel"] = abs_rel(pred_depth, depth).cpu()
     if lpips_fn is not None:
         out["lpips_ldr"] = lpips_fn(ldr_p, ldr_t)
     return out
 
 
 def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFitConfig(), batch_size: int = 8,
-                   depth_only_fit: bool = False, progress: bool = True, note=print) -> dict:
+                   depth_only_fit: bool = False, progress: bool = True, note=print,
+                   radiance_only: bool = False) -> dict:
     """Score encoder reconstructions and latent fits over ``dataset``.
 
     Args:
@@ -69,6 +74,9 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         fit_config: latent-fit settings; None skips the latent-fit row.
         batch_size: panoramas processed together (latents are fitted independently).
         depth_only_fit: add a row "latent fit (depth only)" (the supplementary's AbsRel check).
+        radiance_only: evaluate panoramas without depth (real captures): the encoder needs depth,
+            so the only row is "latent fit (radiance)", z fitted to radiance alone (the dataset
+            must be built with ``require_depth=False``); depth metrics are left out.
         note: receives messages (skipped files, LPIPS availability).
     Returns:
         ``{"count", "rows": {row: {metric: mean}}, "per_image": [...], "skipped": [...],
@@ -81,11 +89,17 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
     lpips_fn, lpips_reason = load_lpips(device)
     if lpips_reason:
         note(lpips_reason)
-    rows = {"encoder": None}
-    if fit_config is not None:
-        rows["latent fit"] = fit_config
-        if depth_only_fit:
-            rows["latent fit (depth only)"] = fit_config.override(target="depth")
+    if radiance_only:
+        if fit_config is None:
+            raise RoomlightError("radiance-only evaluation needs the latent fit (fit steps > 0): "
+                                 "the encoder needs depth")
+        rows = {"latent fit (radiance)": fit_config.override(target="radiance")}
+    else:
+        rows = {"encoder": None}
+        if fit_config is not None:
+            rows["latent fit"] = fit_config
+            if depth_only_fit:
+                rows["latent fit (depth only)"] = fit_config.override(target="depth")
     per_image, skipped = [], []
     values: dict[str, dict[str, list]] = {r: {} for r in rows}
     # The bar counts work units: one per batch for the encoder pass, one per latent-fit step, so a
@@ -102,7 +116,11 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         if batch["radiance"] is None:
             bar.update(per_batch)
             continue
-        rad, dep = batch["radiance"].to(device), batch["depth"].to(device)
+        rad = batch["radiance"].to(device)
+        dep = None if radiance_only or batch["depth"] is None else batch["depth"].to(device)
+        if dep is None and not radiance_only:
+            raise RoomlightError(f"{', '.join(batch['names'])}: no depth; evaluate radiance-only "
+                                 "panoramas with --radiance-only")
         records = [{"name": n} for n in batch["names"]]
         for row, cfg in rows.items():
             if cfg is None:
@@ -123,6 +141,10 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         per_image += records
         done += len(batch["names"]) + len(batch["skipped"])
     bar.close()
+    if not per_image:
+        hint = ("; they have no depth: evaluate them with --radiance-only"
+                if skipped and all("no depth" in s["reason"] for s in skipped) else "")
+        raise RoomlightError(f"no usable panorama to evaluate ({len(skipped)} skipped{hint})")
     means = {row: {k: _mean(v) for k, v in vals.items()} for row, vals in values.items()}
     return {"count": len(per_image), "rows": means, "per_image": per_image, "skipped": skipped,
             "lpips": lpips_reason, "fit": fit_config.to_dict() if fit_config is not None else None}
