@@ -20,6 +20,8 @@ LAYERS = [
     ["cli"],
     ["demo"],
     ["train", "parallax"],
+    ["viewer"],
+    ["export"],
     ["eval", "bench", "synth"],
     ["inverse", "data"],
     ["scene", "fit", "losses", "model", "examples"],
