@@ -29,7 +29,7 @@ LAYERS = [
     ["emitter"],
     ["io"],
     ["geometry"],
-    ["color", "config"],
+    ["color", "config", "progress"],
     ["errors"],
 ]
 

@@ -133,9 +133,9 @@ def scene_figures(records: list[dict], out_dir, progress: bool = True) -> dict[s
     order = {m: i for i, m in enumerate(METHOD_ORDER)}
     items = sorted(by_scene.items())
     if progress:
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
-        items = tqdm(items, desc="bench report", unit="figure", dynamic_ncols=True)
+        items = progress_bar(items, desc="bench report", unit="figure")
     out = {}
     for sid, recs in items:
         recs = sorted(recs, key=lambda r: (order.get(r["method"], len(order)), r["method"]))

@@ -291,9 +291,9 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
             todo.append(c)
     bar = None
     if progress and todo:
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
-        bar = tqdm(total=len(todo), desc="bench run", unit="case", dynamic_ncols=True)
+        bar = progress_bar(total=len(todo), desc="bench run", unit="case")
     try:
         for c in todo:
             name = f"{c.scene_id}/{c.method}"

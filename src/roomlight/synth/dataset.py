@@ -174,9 +174,9 @@ def generate_dataset(out, cfg: SynthConfig, progress: bool = True) -> dict:
     seconds = []
     bar = None
     if progress:
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
-        bar = tqdm(total=len(seeds), initial=len(seeds) - len(todo), desc="synth", unit="pano")
+        bar = progress_bar(total=len(seeds), initial=len(seeds) - len(todo), desc="synth", unit="pano")
     t0 = time.perf_counter()
     if cfg.workers > 1 and len(jobs) > 1:
         with ProcessPoolExecutor(cfg.workers) as pool:
