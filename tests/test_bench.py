@@ -304,6 +304,24 @@ def test_report_figures_and_index(results, tmp_path):
     html = paths["html"].read_text()
     assert "figures/room_mirror.png" in html and "<table>" in html
     assert "Failed cases" in paths["markdown"].read_text()
+    for text in ("Methods", "Metrics", "Settings", "Fit time", "radial depth", "oracle"):
+        assert text in html
+    _report_in_a_browser(paths["html"], tmp_path)
+
+
+def _report_in_a_browser(page, tmp_path):
+    """Chromium shows the tables (their 1 px #ccc borders) and the figures (saturated colour)."""
+    from helpers_browser import screenshot
+
+    img = screenshot(page, tmp_path / "report.png", size=(1280, 4200), budget_ms=1000).astype(int)
+    def longest_run(row):
+        d = np.diff(np.r_[0, row.astype(int), 0])
+        return (np.flatnonzero(d == -1) - np.flatnonzero(d == 1)).max(initial=0)
+
+    border = np.all(img == 204, axis=-1)
+    assert max(longest_run(row) for row in border) > 200, "no table border drawn"
+    saturated = (img.max(-1) - img.min(-1)) > 80
+    assert saturated.sum() > 20000, "the figures did not load"
 
 
 # ----------------------------------------------------------------------------------- CLI

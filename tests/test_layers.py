@@ -29,7 +29,7 @@ LAYERS = [
     ["emitter"],
     ["io"],
     ["geometry"],
-    ["color", "config", "progress"],
+    ["color", "config", "progress", "cluster"],
     ["errors"],
 ]
 
