@@ -26,7 +26,7 @@ def chromium() -> str:
                 "on other systems install Chromium and put it on PATH)")
 
 
-def screenshot(page: Path, out: Path, fragment: str = "", size=(800, 500), budget_ms: int = 3000) -> np.ndarray:
+def screenshot(page: Path, out: Path, fragment: str = "", size=(800, 500), budget_ms: int = 800) -> np.ndarray:
     """Load ``page`` (with ``#fragment``) in a fresh profile and return the screenshot as (H, W, 3) uint8."""
     from PIL import Image
 

@@ -143,3 +143,34 @@ def test_export_needs_a_known_format(bundle, tmp_path):
 def test_export_of_a_folder_without_a_light_names_what_it_expected(tmp_path):
     res = CliRunner().invoke(cli, ["export", str(tmp_path), "--out", str(tmp_path / "x.glb")])
     assert res.exit_code == 2 and "no emitter here" in res.output and "scene.json" in res.output
+
+
+def test_load_light_finds_the_light_behind_each_kind_of_output(tmp_path):
+    """Samples, fits, env-map bundles with depth, scene files: the same mesh as the bundle's PLY."""
+    import json as _json
+
+    from roomlight.export import load_light
+    from roomlight.io import write_panorama
+
+    rad, depth = example_room(8)
+    export_emitter(tmp_path / "samples" / "sample_000", rad, depth, "mesh")
+    export_emitter(tmp_path / "fit" / "emitter", rad, depth, "mesh")
+    export_emitter(tmp_path / "env", rad, depth, "envmap")
+    reference = read_ply(tmp_path / "fit" / "emitter" / "emitter.ply")
+    (tmp_path / "case").mkdir()
+    write_panorama(tmp_path / "case" / "emitter.exr", (rad.numpy(), depth.numpy()), half=False)
+    (tmp_path / "case" / "scene.json").write_text(_json.dumps({
+        "version": 1, "emitter": {"panorama": "emitter.exr"},
+        "objects": [{"id": "ball", "shape": "sphere", "scale": 0.25, "translate": [0.5, -0.5, -1.0]}],
+        "views": {"input": {"camera": {"origin": [0, 0, 0], "target": [0, 0, -1], "width": 32, "height": 32}, "objects": ["ball"]}}}))
+    for path in ("samples", "samples/sample_000", "fit", "env", "case", "case/scene.json"):
+        light = load_light(tmp_path / path)
+        np.testing.assert_allclose(light.vertices, reference["vertices"], atol=1e-5, err_msg=path)
+        np.testing.assert_array_equal(light.faces, reference["faces"])
+        np.testing.assert_allclose(light.uv, reference["uv"], atol=1e-7)
+        np.testing.assert_allclose(light.radiance, rad.numpy(), rtol=1e-6)
+    (ball,) = light.objects
+    # the built-in sphere has bounding radius 1: scale 0.25 around the translation
+    np.testing.assert_allclose(ball.vertices.min(0), [0.25, -0.75, -1.25], atol=1e-3)
+    np.testing.assert_allclose(ball.vertices.max(0), [0.75, -0.25, -0.75], atol=1e-3)
+    assert ball.role == "input" and light.camera["target"] == [0.0, 0.0, -1.0]

@@ -121,7 +121,7 @@ def test_viewer_screenshot_of_the_example_room(tmp_path):
     export_emitter(bundle, rad, depth, "mesh")
     page = _view(bundle, tmp_path)
     shot = tmp_path / "viewer.png"
-    img = screenshot(page, shot, "probe=0.5,-0.6,-1.4&camera=-0.2,0.3,1.3&target=0.4,-0.2,-1.2", (1000, 600))
+    img = screenshot(page, shot, "probe=0.6,-0.55,-1.5&radius=0.3&camera=-0.4,0.1,0.4&target=0.6,-0.55,-1.5", (1000, 600))
     assert (img.max(-1) > 30).mean() > 0.5
     if os.environ.get("ROOMLIGHT_SAVE_SCREENSHOTS"):
         shutil.copy(shot, os.path.join(os.environ["ROOMLIGHT_SAVE_SCREENSHOTS"], "viewer.png"))

@@ -90,8 +90,8 @@ def write_viewer(light: LightSource, out, title: str | None = None, cube_size: i
     app = (Path(__file__).with_name("viewer.js")).read_text(encoding="utf-8")
     extra = (f" {data['clipped_texels']} texels above {HALF_MAX:g} are shown clipped."
              if data["clipped_texels"] else "")
-    if light.objects:
-        extra += f" Scene objects: {', '.join(html.escape(o.id) for o in light.objects)} (not lit, shown for place)."
+    if data["objects"]:
+        extra += f" Scene objects: {', '.join(html.escape(o['id']) for o in data['objects'])} (not lit, shown for place)."
     page = Template((Path(__file__).with_name("page.html")).read_text(encoding="utf-8")).substitute(
         title=html.escape(title or Path(light.source).name), source=html.escape(light.source), extra=extra,
         inset_width=INSET_WIDTH, inset_height=INSET_WIDTH // 2,

@@ -97,7 +97,7 @@ function probeMaterial(cube, diffuse) {
 }
 const ball = new THREE.SphereGeometry(1, 64, 32);
 const probe = new THREE.Mesh(ball, probeMaterial(probeCube, args.get('material') === 'diffuse'));
-probe.scale.setScalar(D.probe_radius); probe.layers.set(2); scene.add(probe);
+probe.scale.setScalar(args.has('radius') ? +args.get('radius') : D.probe_radius); probe.layers.set(2); scene.add(probe);
 probe.position.fromArray(vec(args.get('probe'), D.probe));
 
 // ---- insets: mirror and diffuse probes under the 2.5D light (left) and under the env map (right)
