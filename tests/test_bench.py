@@ -409,7 +409,7 @@ def test_cli_paper_flags_reach_the_configs(monkeypatch, tmp_path):
         seen["make"] = cfg
         return {"panoramas": [], "scenes": []}
 
-    def fake_run(bench, out, methods, cfg, model, eval_spp, shard, progress):
+    def fake_run(bench, out, methods, cfg, model, eval_spp, shard, progress, scheduler=None, model_name=None):
         seen["run"] = (methods, cfg, eval_spp, shard)
         return runner.RunSummary()
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 __all__ = ["THREE_VERSION", "three_dir", "module_scripts"]
 
-THREE_VERSION = "0.187.0"
+THREE_VERSION = "0.187.0"  #: keep in step with scripts/ensure_web.sh, which installs it
 _REPO = Path(__file__).resolve().parents[3]
 
 # (name, path inside the npm package, {import specifier: name of the module it refers to})

@@ -174,14 +174,14 @@ function resize() {
   const w = canvas.clientWidth, h = canvas.clientHeight;
   if (canvas.width !== w || canvas.height !== h) { renderer.setSize(w, h, false); camera.aspect = w / h; camera.updateProjectionMatrix(); }
 }
-function cube(cam, target, at) {
+function cube(cam, at) {
   U.uRaw.value = 1; cam.position.copy(at); cam.update(renderer, scene); U.uRaw.value = 0;
 }
 let frames = 0;
 function frame() {
   resize();
-  if (frames === 0) cube(envCam, envCube, new THREE.Vector3());
-  cube(probeCam, probeCube, probe.position);
+  if (frames === 0) cube(envCam, new THREE.Vector3());
+  cube(probeCam, probe.position);
   const w = canvas.width, h = canvas.height;
   renderer.setScissorTest(true);
   renderer.setViewport(0, 0, w, h); renderer.setScissor(0, 0, w, h);
