@@ -116,6 +116,11 @@ def test_usd_round_trip(bundle, tmp_path):
     assert tex.GetInput("sourceColorSpace").Get() == "raw"
     path = out.parent / tex.GetInput("file").Get().path
     np.testing.assert_array_equal(_exr_rgb(path), radiance)
+    if hasattr(pxr, "UsdValidation"):  # USD's own validators (usd-core >= 24.11)
+        from pxr import UsdValidation
+
+        ctx = UsdValidation.ValidationContext(UsdValidation.ValidationRegistry().GetOrLoadAllValidators())
+        assert [e.GetErrorAsString() for e in ctx.Validate(stage)] == []
 
 
 def test_obj_round_trip(bundle, tmp_path):

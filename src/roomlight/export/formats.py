@@ -129,7 +129,7 @@ def _write_usd(light: LightSource, out: Path) -> dict[str, Path]:
     surf.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(1.0)
     reader = UsdShade.Shader.Define(stage, "/World/Looks/AreaLightMaterial/StReader")
     reader.CreateIdAttr("UsdPrimvarReader_float2")
-    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
     tex = UsdShade.Shader.Define(stage, "/World/Looks/AreaLightMaterial/Radiance")
     tex.CreateIdAttr("UsdUVTexture")
     tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(files["radiance"].name)
