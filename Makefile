@@ -8,18 +8,22 @@ PY     := $(VENV)/bin/python
 TORCH_SPEC ?= $(shell if command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi -L >/dev/null 2>&1; then echo "torch"; else echo "torch==2.13.0"; fi)
 STAMP  := $(VENV)/.roomlight-installed
 
-.PHONY: all setup demo test test-fast bench clean info
+.PHONY: all setup web demo test test-fast bench clean info
 
 all: test
 
-setup: $(STAMP)
+setup: $(STAMP) web
+
+# three.js (npm, pinned) for `roomlight view`, Chromium for the browser tests; checked on every run
+web:
+	@scripts/ensure_web.sh
 
 $(STAMP): pyproject.toml scripts/ensure_llvm.sh
 	@scripts/ensure_llvm.sh
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@$(PY) -m pip install -q --upgrade pip
 	@$(PY) -c "import torch" 2>/dev/null || $(PY) -m pip install -q "$(TORCH_SPEC)"
-	@$(PY) -m pip install -q -e ".[test,denoise]"
+	@$(PY) -m pip install -q -e ".[test,denoise,export,dask]"
 	@touch $(STAMP)
 
 info: $(STAMP)
@@ -28,10 +32,10 @@ info: $(STAMP)
 demo: $(STAMP)
 	@$(VENV)/bin/roomlight demo
 
-test: $(STAMP)
+test: $(STAMP) web
 	@$(PY) -m pytest -q
 
-test-fast: $(STAMP)
+test-fast: $(STAMP) web
 	@$(PY) -m pytest -q -m "not slow"
 
 bench: $(STAMP)

@@ -290,12 +290,16 @@ def test_shards_partition_the_cases(bench):
             parse_shard(bad)
 
 
-@pytest.mark.mitsuba
-def test_report_figures_and_index(results, tmp_path):
+@pytest.fixture(scope="module")
+def report(results, tmp_path_factory):
     from roomlight.bench.report import write_report
 
-    res, _, _ = results
-    paths = write_report(res, tmp_path / "rep", progress=False)
+    return write_report(results[0], tmp_path_factory.mktemp("rep"), progress=False)
+
+
+@pytest.mark.mitsuba
+def test_report_figures_and_index(report):
+    paths = report
     figs = sorted(k for k in paths if k.startswith("figure:"))
     assert figs == ["figure:room/diffuse", "figure:room/mirror"]
     from PIL import Image
@@ -304,6 +308,24 @@ def test_report_figures_and_index(results, tmp_path):
     html = paths["html"].read_text()
     assert "figures/room_mirror.png" in html and "<table>" in html
     assert "Failed cases" in paths["markdown"].read_text()
+    for text in ("Methods", "Metrics", "Settings", "Fit time", "radial depth", "oracle"):
+        assert text in html
+
+
+@pytest.mark.mitsuba
+def test_report_in_a_browser(report, tmp_path):
+    """Chromium shows the tables (their 1 px #ccc borders) and the figures (saturated colour)."""
+    from helpers_browser import screenshot
+
+    img = screenshot(report["html"], tmp_path / "report.png", size=(1280, 4200), budget_ms=1000).astype(int)
+    def longest_run(row):
+        d = np.diff(np.r_[0, row.astype(int), 0])
+        return (np.flatnonzero(d == -1) - np.flatnonzero(d == 1)).max(initial=0)
+
+    border = np.all(img == 204, axis=-1)
+    assert max(longest_run(row) for row in border) > 200, "no table border drawn"
+    saturated = (img.max(-1) - img.min(-1)) > 80
+    assert saturated.sum() > 20000, "the figures did not load"
 
 
 # ----------------------------------------------------------------------------------- CLI
@@ -391,7 +413,7 @@ def test_cli_paper_flags_reach_the_configs(monkeypatch, tmp_path):
         seen["make"] = cfg
         return {"panoramas": [], "scenes": []}
 
-    def fake_run(bench, out, methods, cfg, model, eval_spp, shard, progress):
+    def fake_run(bench, out, methods, cfg, model, eval_spp, shard, progress, scheduler=None, model_name=None):
         seen["run"] = (methods, cfg, eval_spp, shard)
         return runner.RunSummary()
 

@@ -111,7 +111,8 @@ def test_report_tables_hand_computed(tmp_path):
     assert lines[0].startswith("| Method | Emitter | PSNR LDR ↑ diffuse | PSNR LDR ↑ mirror | RMSE HDR ↓ diffuse")
     # Rows in the paper's order (smoothness baselines first); best per column in bold.
     assert lines[2].startswith("| direct-envmap | Env map | 10.00 ± 0.00 | – | 0.600 ± 0.100 |")
-    assert lines[3].startswith("| prior | 2.5D AL | **25.00 ± 5.00** | 15.00 ± 0.00 | **0.200 ± 0.100** |")
+    # mirror has one scene: its value alone, no "± 0.00"
+    assert lines[3].startswith("| prior | 2.5D AL | **25.00 ± 5.00** | 15.00 | **0.200 ± 0.100** |")
     # Angular error: lower is better, so the env map's 1.5 wins over the prior's 2.0.
     assert "| **1.500 ± 0.500** |" in lines[2] and "| 2.000 ± 1.000 |" in lines[3]
     import csv

@@ -20,6 +20,8 @@ LAYERS = [
     ["cli"],
     ["demo"],
     ["train", "parallax"],
+    ["viewer"],
+    ["export"],
     ["eval", "bench", "synth"],
     ["inverse", "data"],
     ["scene", "fit", "losses", "model", "examples"],
@@ -27,7 +29,7 @@ LAYERS = [
     ["emitter"],
     ["io"],
     ["geometry"],
-    ["color", "config"],
+    ["color", "config", "progress", "cluster"],
     ["errors"],
 ]
 

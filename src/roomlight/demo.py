@@ -111,7 +111,8 @@ def run_demo(cfg: DemoConfig) -> dict:
     fc = fit_config("fast", iterations=cfg.iterations, spp=cfg.spp, direct_resolution=(h, 2 * h))
     _say(4, total, f"fitting {', '.join(methods)} ({cfg.iterations} iterations, {cfg.spp} spp)", t0)
     results = out / "results"
-    run_benchmark(bench, results, methods, fc, model, eval_spp=cfg.gt_spp, progress=True)
+    run_benchmark(bench, results, methods, fc, model, eval_spp=cfg.gt_spp, progress=True,
+                  model_name=f"the bundled prior ({prior})" if model is not None else None)
 
     _say(5, total, "report", t0)
     paths = write_report(results, out / "report", progress=False)

@@ -275,9 +275,9 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
     out.mkdir(parents=True, exist_ok=True)
     bar = None
     if progress:
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
-        bar = tqdm(total=len(files) * len(config.materials), desc="bench make", unit="scene", dynamic_ncols=True)
+        bar = progress_bar(total=len(files) * len(config.materials), desc="bench make", unit="scene")
     records = []
     try:
         for f, name in zip(files, names, strict=True):

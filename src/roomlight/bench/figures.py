@@ -4,16 +4,17 @@ One PNG per scene (paper Fig. 5 layout, one row per method below the ground trut
 
 ==========  ===================================================================================
 probe       the evaluation view cropped around the probe, gamma 2.2 (as the LDR metric sees it)
-error       per-pixel mean |LDR difference| to the ground truth on the probe, 0 to 0.25 (inferno)
+error       per-pixel mean |LDR difference| to the ground truth on the probe, 0 to 0.25 (inferno),
+            one scale for every row, its colour bar below the figure
 input       the input view (the fitted objects)
 radiance    the emitter radiance panorama, gamma 2.2 at the camera exposure
-depth       its radial depth, log colour map over the ground truth's range (env maps: none)
+depth       its radial depth, log colour map over the ground truth's range (env maps: none), with
+            a colour bar in metres below the figure
 ==========  ===================================================================================
 """
 
 from __future__ import annotations
 
-import html
 import warnings
 from pathlib import Path
 
@@ -21,7 +22,7 @@ import numpy as np
 
 from roomlight.color import to_display
 
-__all__ = ["ERROR_RANGE", "scene_figure", "scene_figures", "write_index"]
+__all__ = ["ERROR_RANGE", "scene_figure", "scene_figures"]
 
 #: Upper end of the error maps' colour scale (mean absolute LDR difference).
 ERROR_RANGE = 0.25
@@ -50,7 +51,30 @@ def _metrics_text(rec: dict) -> str:
     m = rec["metrics"].get("eval", {})
     if not m:
         return ""
-    return f"PSNR {m['psnr_ldr']:.2f}  RMSE {m['rmse_hdr']:.3f}  {m['angular_error']:.2f}°"
+    return f"PSNR {m['psnr_ldr']:.2f} dB   RMSE {m['rmse_hdr']:.3f}   angle {m['angular_error']:.2f}°"
+
+
+def _colour_bars(fig, grid, row: int, error_cmap, vmin, vmax, log_depth: bool) -> None:
+    """Horizontal colour bars under the error column (0 to ERROR_RANGE) and the depth column (metres)."""
+    import matplotlib
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import LogNorm, Normalize
+
+    bar = fig.colorbar(ScalarMappable(Normalize(0.0, ERROR_RANGE), error_cmap), cax=fig.add_subplot(grid[row, 1]),
+                       orientation="horizontal")
+    bar.set_ticks(np.linspace(0.0, ERROR_RANGE, 3))
+    bar.set_label("mean |LDR difference|", fontsize=9)
+    bar.ax.tick_params(labelsize=8)
+    if vmin is None:
+        return
+    norm = LogNorm(vmin, vmax) if log_depth else Normalize(vmin, vmax)
+    bar = fig.colorbar(ScalarMappable(norm, matplotlib.colormaps["turbo"]), cax=fig.add_subplot(grid[row, 4]),
+                       orientation="horizontal")
+    ticks = np.unique(np.round(np.geomspace(vmin, vmax, 5) if log_depth else np.linspace(vmin, vmax, 5), 1))
+    bar.set_ticks(ticks, labels=[f"{t:g}" for t in ticks])
+    bar.ax.minorticks_off()
+    bar.set_label("radial depth (m)", fontsize=9)
+    bar.ax.tick_params(labelsize=8)
 
 
 def scene_figure(scene_path, records: list[dict], path) -> Path:
@@ -59,6 +83,7 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from roomlight.bench.tables import representation
     from roomlight.io import colorize_depth, read_panorama
     from roomlight.scene.build import load_view_target
     from roomlight.scene.build import load_scene
@@ -77,44 +102,49 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
         d = Path(rec["_dir"])
         try:
             pano = read_panorama(d / "recovered.exr")
-            rows.append((f"{rec['method']}", _rgb_exr(d / "eval.exr"), _rgb_exr(d / "input.exr"), pano,
+            label = f"{rec['method']}\n({representation(str(rec.get('emitter_kind', '?')))})"
+            rows.append((label, _rgb_exr(d / "eval.exr"), _rgb_exr(d / "input.exr"), pano,
                          _metrics_text(rec)))
         except Exception as exc:  # a half-written case must not stop the report
             warnings.warn(f"{d}: skipped in the figure ({exc})", stacklevel=2)
     cmap = matplotlib.colormaps["inferno"].with_extremes(bad=(0.25, 0.25, 0.25))
-    fig = Figure(figsize=(13.0, 2.1 * len(rows) + 0.4), dpi=100)
+    fig = Figure(figsize=(13.0, 2.2 * len(rows) + 1.2), dpi=100)
     FigureCanvasAgg(fig)
-    grid = fig.add_gridspec(len(rows), 5, width_ratios=[1, 1, 1, 2, 2], wspace=0.05, hspace=0.25)
-    titles = ["probe (eval view)", "probe |LDR error|", "input view", "radiance", "depth"]
+    # one row per light, then a thin row for the colour bars shared by every row above
+    grid = fig.add_gridspec(len(rows) + 1, 5, width_ratios=[1, 1, 1, 2, 2], height_ratios=[1] * len(rows) + [0.07],
+                            wspace=0.06, hspace=0.45)
+    titles = ["held-out probe\n(gamma 2.2)", "|LDR error|\non the probe", "input view\n(fitted objects)",
+              "emitter radiance (gamma 2.2)", "emitter depth (m, log scale)"]
     gt_ldr = to_display(gt_eval)
+    log_depth = vmin is not None and vmin > 0
     for r, (label, ev, inp, pano, text) in enumerate(rows):
         axes = [fig.add_subplot(grid[r, c]) for c in range(5)]
         for c, ax in enumerate(axes):
             ax.set_xticks([])
             ax.set_yticks([])
             if r == 0:
-                ax.set_title(titles[c], fontsize=9)
+                ax.set_title(titles[c], fontsize=10)
         axes[0].imshow(to_display(ev)[crop])
-        axes[0].set_ylabel(label, fontsize=9)
+        axes[0].set_ylabel(label, fontsize=10)
         if r == 0:
             axes[1].set_facecolor((0.25, 0.25, 0.25))
+            axes[1].text(0.5, 0.5, "reference", ha="center", va="center", color="white", fontsize=9,
+                         transform=axes[1].transAxes)
         else:
             err = np.abs(to_display(ev) - gt_ldr).mean(-1)
             err = np.ma.masked_where(~mask_eval, err)
-            im = axes[1].imshow(err[crop], cmap=cmap, vmin=0.0, vmax=ERROR_RANGE)
-            last_err = axes[1]
-            axes[1].set_xlabel(text, fontsize=7)
+            axes[1].imshow(err[crop], cmap=cmap, vmin=0.0, vmax=ERROR_RANGE)
+            axes[0].set_xlabel(text, fontsize=9, loc="left")
         axes[2].imshow(to_display(inp))
         if pano is not None:
             axes[3].imshow(to_display(pano.radiance))
             if pano.depth is not None:
-                axes[4].imshow(colorize_depth(pano.depth, vmin, vmax, log=vmin is not None and vmin > 0))
+                axes[4].imshow(colorize_depth(pano.depth, vmin, vmax, log=log_depth))
             else:
                 axes[4].set_facecolor((0.25, 0.25, 0.25))
-                axes[4].text(0.5, 0.5, "at infinity", ha="center", va="center", color="white", fontsize=9,
-                             transform=axes[4].transAxes)
-    if len(rows) > 1:
-        fig.colorbar(im, ax=[last_err], fraction=0.05, pad=0.02).ax.tick_params(labelsize=6)
+                axes[4].text(0.5, 0.5, "env map: light at infinity", ha="center", va="center", color="white",
+                             fontsize=9, transform=axes[4].transAxes)
+    _colour_bars(fig, grid, len(rows), cmap, vmin, vmax, log_depth)
     fig.suptitle(f"{scene.metadata.get('benchmark', {}).get('panorama', '')} — "
                  f"{scene.metadata.get('benchmark', {}).get('material', '')}", fontsize=11)
     out = Path(path)
@@ -133,9 +163,9 @@ def scene_figures(records: list[dict], out_dir, progress: bool = True) -> dict[s
     order = {m: i for i, m in enumerate(METHOD_ORDER)}
     items = sorted(by_scene.items())
     if progress:
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
-        items = tqdm(items, desc="bench report", unit="figure", dynamic_ncols=True)
+        items = progress_bar(items, desc="bench report", unit="figure")
     out = {}
     for sid, recs in items:
         recs = sorted(recs, key=lambda r: (order.get(r["method"], len(order)), r["method"]))
@@ -145,53 +175,3 @@ def scene_figures(records: list[dict], out_dir, progress: bool = True) -> dict[s
             continue
         out[sid] = scene_figure(scene_path, recs, Path(out_dir) / (sid.replace("/", "_") + ".png"))
     return out
-
-
-def _md_table_to_html(md: str) -> str:
-    rows = [ln for ln in md.splitlines() if ln.startswith("|")]
-    if len(rows) < 2:
-        return f"<p>{html.escape(md)}</p>"
-    out = ["<table>"]
-    for i, ln in enumerate(rows):
-        if i == 1:
-            continue
-        cells = [c.strip() for c in ln.strip("|").split("|")]
-        tag = "th" if i == 0 else "td"
-        out.append("<tr>" + "".join(
-            f"<{tag}>" + (f"<b>{html.escape(c[2:-2])}</b>" if c.startswith("**") else html.escape(c)) + f"</{tag}>"
-            for c in cells) + "</tr>")
-    out.append("</table>")
-    return "\n".join(out)
-
-
-def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
-    """``index.html``: both tables, links to the CSV/JSON/Markdown files and every scene figure."""
-    from roomlight.bench.paired import paired_differences, paired_markdown
-    from roomlight.bench.tables import MATERIAL_ORDER, markdown_table, ordered
-
-    out = Path(out_dir)
-    parts = ["<!doctype html><html><head><meta charset='utf-8'><title>roomlight benchmark</title>",
-             ("<style>body{font-family:sans-serif;margin:2em;max-width:1400px}"
-              "table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px;"
-              "text-align:center}img{max-width:100%}</style></head><body>"),
-             "<h1>roomlight synthetic benchmark</h1>",
-             ("<p>Files: <a href='report.md'>report.md</a> · <a href='table.csv'>table.csv</a> · "
-              "<a href='table_input.csv'>table_input.csv</a> · <a href='cases.csv'>cases.csv</a> · "
-              "<a href='summary.json'>summary.json</a></p>"),
-             "<h2>Evaluation view (probe) — Table 2</h2>", _md_table_to_html(markdown_table(records, "eval")),
-             "<h2>Paired differences: the prior against each baseline (evaluation view)</h2>",
-             _md_table_to_html(paired_markdown(paired_differences(records, "prior", "eval"), "prior",
-                                               ordered({r["material"] for r in records}, MATERIAL_ORDER))),
-             ("<p>Cells: mean per-scene difference prior − baseline [95 % bootstrap interval of the mean] and "
-              "the scenes the prior wins; ✓ interval entirely on the good side, ✗ entirely on the bad side.</p>"),
-             "<h2>Input view (fitted objects)</h2>", _md_table_to_html(markdown_table(records, "input")),
-             "<h2>Scenes</h2>"]
-    for sid, p in sorted(figures.items()):
-        rel = Path(p).relative_to(out) if Path(p).is_relative_to(out) else Path(p)
-        parts.append(f"<h3 id='{html.escape(sid)}'>{html.escape(sid)}</h3><img src='{html.escape(str(rel))}' "
-                     f"alt='{html.escape(sid)}'>")
-    parts.append(f"<p><small>{len(records)} cases. Generated by <code>roomlight bench report</code>.</small></p>")
-    parts.append("</body></html>")
-    path = out / "index.html"
-    path.write_text("\n".join(parts))
-    return path

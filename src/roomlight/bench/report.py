@@ -123,7 +123,8 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
                                "interval of the mean, scenes won by the prior")}
     paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
     md = ["# Benchmark results", "",
-          f"{len(records)} cases, {summary['scenes']} scenes. Cells: mean ± std over scenes; best in bold.", "",
+          f"{len(records)} cases, {summary['scenes']} scenes. Cells: mean ± std over scenes (one scene: its value "
+          "alone); best in bold.", "",
           "## Evaluation view (probe sphere) — paper Table 2", "", markdown_table(records, "eval"),
           "## Paired differences, evaluation view: the prior against each baseline", "",
           paired_markdown(summary["paired"]["eval"], "prior", summary["materials"]),
@@ -153,7 +154,7 @@ def write_report(res_dir, out_dir=None, figures: bool = True, progress: bool = T
         from roomlight.bench.figures import scene_figures
 
         figs = scene_figures(records, out / "figures", progress=progress)
-    from roomlight.bench.figures import write_index
+    from roomlight.bench.page import write_index
 
     paths["html"] = write_index(out, records, figs)
     paths.update({f"figure:{k}": v for k, v in figs.items()})

@@ -250,8 +250,26 @@ def _check_run_file(out: Path, settings: dict) -> None:
     _write_json(f, settings)
 
 
+def _attempt(c: Case, out: Path, fit, fit_config, model, eval_spp: int, max_depth: int,
+             progress: bool) -> tuple[str, str | None]:
+    """Run one case; a failure is written to its ``error.json`` and returned as text."""
+    name = f"{c.scene_id}/{c.method}"
+    try:
+        run_case(c, out, fit, fit_config, model, eval_spp, max_depth, progress)
+        return name, None
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # one failed case must not stop a long run
+        cdir = c.directory(out)
+        cdir.mkdir(parents=True, exist_ok=True)
+        _write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
+                                          "traceback": traceback.format_exc()})
+        return name, f"{type(exc).__name__}: {exc}"
+
+
 def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = DEFAULT_EVAL_SPP,
-                  shard=(0, 1), max_depth: int = 4, progress: bool = True, fit=None) -> RunSummary:
+                  shard=(0, 1), max_depth: int = 4, progress: bool = True, fit=None, scheduler=None,
+                  model_name: str | None = None) -> RunSummary:
     """Run (a shard of) the benchmark; see the module docstring.
 
     Args:
@@ -263,6 +281,9 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
         eval_spp: samples per pixel of the re-renders (paper: 4096).
         shard: (i, n), see :func:`parse_shard`.
         fit: the fitting function (default ``roomlight.inverse.fit_scene``).
+        scheduler: a Dask scheduler address (or cluster): run the cases on its workers
+            (:func:`roomlight.cluster.map_unordered`); the files are the same as in a serial run.
+        model_name: where the prior came from, recorded in ``run.json`` for the report.
     """
     if fit is None:
         fit = _default_fit()
@@ -280,6 +301,8 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
     settings = {"bench": str(bench), "methods": list(methods),
                 "fit_config": json.loads(json.dumps(cfg_dict, default=_json_default)),
                 "eval_spp": eval_spp, "max_depth": max_depth}
+    if model_name is not None:
+        settings["model"] = str(model_name)
     _check_run_file(out, settings)
     cases = list_cases(bench, methods, shard)
     summary = RunSummary()
@@ -291,28 +314,26 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
             todo.append(c)
     bar = None
     if progress and todo:
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
-        bar = tqdm(total=len(todo), desc="bench run", unit="case", dynamic_ncols=True)
+        bar = progress_bar(total=len(todo), desc="bench run", unit="case")
+    from functools import partial
+
+    from roomlight.cluster import map_unordered
+
+    # on a cluster the fits print no bars of their own (this process shows the cases)
+    one = partial(_attempt, out=out, fit=fit, fit_config=fit_config, model=model, eval_spp=eval_spp,
+                  max_depth=max_depth, progress=progress and scheduler is None)
     try:
-        for c in todo:
-            name = f"{c.scene_id}/{c.method}"
+        for name, error in map_unordered(one, todo, scheduler):
+            if error is None:
+                summary.done.append(name)
+            else:
+                summary.failed[name] = error
+                if bar is not None:
+                    bar.write(f"bench run: {name} failed: {error}")
             if bar is not None:
                 bar.set_postfix_str(name)
-            try:
-                run_case(c, out, fit, fit_config, model, eval_spp, max_depth, progress)
-                summary.done.append(name)
-            except KeyboardInterrupt:
-                raise
-            except Exception as exc:  # one failed case must not stop a long run
-                summary.failed[name] = f"{type(exc).__name__}: {exc}"
-                cdir = c.directory(out)
-                cdir.mkdir(parents=True, exist_ok=True)
-                _write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
-                                                  "traceback": traceback.format_exc()})
-                if bar is not None:
-                    bar.write(f"bench run: {name} failed: {type(exc).__name__}: {exc}")
-            if bar is not None:
                 bar.update()
     finally:
         if bar is not None:

@@ -104,7 +104,8 @@ def markdown_table(records: list[dict], view: str = "eval") -> str:
                 if s is None:
                     cells.append("–")
                     continue
-                text = f"{_fmt(s['mean'], k)} ± {_fmt(s['std'], k)}"
+                # one scene has no spread to show
+                text = _fmt(s["mean"], k) if s["n"] == 1 else f"{_fmt(s['mean'], k)} ± {_fmt(s['std'], k)}"
                 cells.append(f"**{text}**" if best[(k, mat)] == m else text)
         lines.append("| " + " | ".join(cells) + " |")
     n = {mat: max(summary[m].get(mat, {}).get(METRICS[0], {}).get("n", 0) for m in methods) for mat in materials}

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from roomlight.bench.builder import BenchConfig
@@ -89,8 +91,10 @@ def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, material
 @click.option("--eval-spp", type=int, default=None, help=f"Samples per pixel of the scoring re-renders [default: {DEFAULT_EVAL_SPP}].")
 @click.option("--paper", is_flag=True, help="Score at the paper's 4096 spp.")
 @click.option("--shard", default=None, metavar="I/N", help="Run only cases I, I+N, I+2N, ... (0 <= I < N).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Run the cases on the workers of this Dask scheduler (tcp://host:8786); needs roomlight[dask].")
 @click.option("--quiet", is_flag=True, help="No progress bars.")
-def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_spp, paper, shard, quiet):
+def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_spp, paper, shard, scheduler, quiet):
     """Fit every scene of BENCH with each method, re-render both views and score them.
 
     Each case writes OUT/cases/<panorama>/<material>/<method>/result.json; finished cases are
@@ -118,7 +122,8 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
         prior = load_run_model(model, device=torch_device())
     spp = eval_spp if eval_spp is not None else (PAPER_EVAL_SPP if paper else DEFAULT_EVAL_SPP)
     summary = run_benchmark(bench, out_dir, method_list, cfg, prior, eval_spp=spp, shard=parse_shard(shard),
-                            progress=not quiet)
+                            progress=not quiet, scheduler=scheduler,
+                            model_name=str(Path(model).resolve()) if prior is not None else None)
     click.echo(f"bench run: {len(summary.done)} done, {len(summary.skipped)} already done, "
                f"{len(summary.failed)} failed -> {out_dir}")
     for name, err in summary.failed.items():

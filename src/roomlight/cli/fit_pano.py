@@ -38,7 +38,7 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out
       comparison.png   target above fit (tone-mapped radiance | depth)
       emitter/         the fit as a 2.5D area light (PLY + EXR + Mitsuba XML), unless --no-emitter
     """
-    from tqdm import tqdm
+    from roomlight.progress import progress_bar
 
     from roomlight.data.dataset import load_training_pair
     from roomlight.emitter.export import export_emitter
@@ -60,7 +60,7 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out
     cfg = LatentFitConfig(steps=steps, lr=lr, lr_final=lr_final, target=target, init_from_encoder=init == "encoder")
     rad_b = rad[None].to(device)
     dep_b = dep[None].to(device) if dep is not None else None
-    bar = tqdm(total=steps, desc="fit-pano", unit="step")
+    bar = progress_bar(total=steps, desc="fit-pano", unit="step")
 
     def progress(step, loss):
         bar.update(1)

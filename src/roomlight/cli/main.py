@@ -27,14 +27,17 @@ def cli():
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
       roomlight bench make|run|report      the synthetic benchmark
+      roomlight view PATH --out page.html  an interactive viewer of a 2.5D light
+      roomlight export PATH --out light.glb   the light for Blender / three.js / USD
     """
 
 
 def _register():
-    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, fit, fit_pano, info, render, sample,
-                               synth, train)
+    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, export, fit, fit_pano, info, render,
+                               sample, synth, train, view)
 
-    for mod in (info, emitter, render, synth, data, train, fit_pano, eval_prior, sample, convert, fit, bench, demo):
+    for mod in (info, emitter, render, synth, data, train, fit_pano, eval_prior, sample, convert, fit, bench, demo,
+                view, export):
         cli.add_command(mod.command)
 
 

@@ -33,6 +33,8 @@ def _shard(text: str) -> tuple[int, int]:
 @click.option("--seed", "seed0", type=int, default=0, show_default=True, help="First seed.")
 @click.option("--shard", default="0/1", show_default=True, help="Render only seeds with seed % n == i (i/n).")
 @click.option("--workers", type=int, default=1, show_default=True, help="Worker processes.")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Render on the workers of this Dask scheduler (tcp://host:8786) instead; needs roomlight[dask].")
 @click.option("--nadir-cap", type=float, default=0.0, show_default=True,
               help="Simulate a tripod blind spot: black cap of this polar angle (degrees) at the nadir.")
 @click.option("--denoise/--no-denoise", default=None,
@@ -40,7 +42,7 @@ def _shard(text: str) -> tuple[int, int]:
                    "values. Default: on when pyoidn can be imported. 64 spp denoised matches 256 spp "
                    "without it at 4x the speed (docs/synth.md).")
 @click.option("--no-summary", is_flag=True, help="Skip stats.json and the contact sheet.")
-def command(n, out_dir, res, spp, seed0, shard, workers, nadir_cap, denoise, no_summary):
+def command(n, out_dir, res, spp, seed0, shard, workers, scheduler, nadir_cap, denoise, no_summary):
     """Render N procedural rooms into OUT as panorama EXRs (R,G,B + Z depth in metres).
 
     Each seed is a random room (box, L-shaped, alcove or a large hall; furniture; doors; windows with sky and
@@ -68,7 +70,7 @@ def command(n, out_dir, res, spp, seed0, shard, workers, nadir_cap, denoise, no_
     if w != 2 * h:
         raise click.BadParameter(f"panoramas are H x 2H, got {h}x{w}", param_hint="--res")
     cfg = SynthConfig(n=n, seed0=seed0, height=h, spp=spp, shard=_shard(shard), workers=max(1, workers),
-                      nadir_cap=nadir_cap, denoise=denoise)
+                      nadir_cap=nadir_cap, denoise=denoise, scheduler=scheduler)
     summary = generate_dataset(out_dir, cfg)
     click.echo(json.dumps(summary))
     if not no_summary:

@@ -144,7 +144,7 @@ class PackedCache:
     def _build(cls, path: Path, root: Path, files: list[Path], resolution, settings: dict, workers: int,
                progress: bool, log) -> None:
         from torch.utils.data import DataLoader
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
         from roomlight.data.dataset import PanoramaDataset, encode_pair
 
@@ -160,7 +160,7 @@ class PackedCache:
         loader = DataLoader(ds, batch_size=None, shuffle=False, num_workers=workers,
                             collate_fn=_identity)
         entries, row = [], 0
-        bar = tqdm(loader, total=n, desc=f"packing {root.name} at {h}x{w}", unit="pano", disable=not progress)
+        bar = progress_bar(loader, total=n, desc=f"packing {root.name} at {h}x{w}", unit="pano", disable=not progress)
         for item in bar:
             p = files[item["index"]]
             entry = {"name": item["name"], **_fingerprint(p), "row": None, "error": None}

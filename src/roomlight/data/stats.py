@@ -21,9 +21,9 @@ __all__ = ["dataset_statistics", "normalization_from_dataset"]
 
 
 def _good_items(dataset, skipped: list, progress: bool, desc: str):
-    from tqdm import tqdm
+    from roomlight.progress import progress_bar
 
-    for i in tqdm(range(len(dataset)), desc=desc, unit="pano", disable=not progress):
+    for i in progress_bar(range(len(dataset)), desc=desc, unit="pano", disable=not progress):
         item = dataset[i]
         if "error" in item:
             skipped.append((item["name"], item["error"]))

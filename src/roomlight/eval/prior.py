@@ -82,7 +82,7 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         ``{"count", "rows": {row: {metric: mean}}, "per_image": [...], "skipped": [...],
         "lpips": None or reason, "fit": LatentFitConfig dict}``.
     """
-    from tqdm import tqdm
+    from roomlight.progress import progress_bar
 
     device = next(model.parameters()).device
     model.eval()
@@ -106,7 +106,7 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
     # 1500-step fit moves it continuously instead of leaving it at 0 % for minutes.
     n_batches = math.ceil(len(dataset) / batch_size)
     per_batch = 1 + sum(cfg.steps for cfg in rows.values() if cfg is not None)
-    bar = tqdm(total=n_batches * per_batch, desc="eval-prior", unit="step", disable=not progress)
+    bar = progress_bar(total=n_batches * per_batch, desc="eval-prior", unit="step", disable=not progress)
     done = 0
     for start in range(0, len(dataset), batch_size):
         batch = collate_panoramas([dataset[i] for i in range(start, min(start + batch_size, len(dataset)))])

@@ -210,9 +210,9 @@ class Fitter:
         log = open(history_path, "w") if history_path else None
         bar = None
         if progress:
-            from tqdm import tqdm
+            from roomlight.progress import progress_bar
 
-            bar = tqdm(total=c.iterations, desc="fit", unit="it", dynamic_ncols=True)
+            bar = progress_bar(total=c.iterations, desc="fit", unit="it")
         t_start = time.perf_counter()
         try:
             for it in range(c.iterations + 1):

@@ -1,22 +1,22 @@
-"""Radiance ``.hdr`` (RGBE) files, in numpy.
+"""Radiance ``.hdr`` (RGBE) files: read with Mitsuba's ``Bitmap``, written in numpy.
 
 Format (Greg Ward's Radiance picture format): a text header of ``NAME=value`` lines that
 starts with ``#?`` (e.g. ``#?RADIANCE``) and ends with an empty line, a resolution line, then
 4 bytes per pixel: mantissas R, G, B and a shared exponent E. A pixel decodes to
-``m * 2**(E - 136)`` (E = 0 means black). This is the decoding of Bruce Walter's reference
-``rgbe.c`` and of Mitsuba 3's reader, so both read our files to the bit.
+``m * 2**(E - 136)`` (E = 0 means black), the decoding of Bruce Walter's reference ``rgbe.c``
+and of Mitsuba 3.
 
-Supported: orientation ``-Y H +X W`` (rows top to bottom, columns left to right: the usual
-one), ``FORMAT=32-bit_rle_rgbe``, and both flat and new-style run-length-encoded (RLE)
-scanlines. Not supported, with a clear error: other orientations, XYZE files, old-style RLE
-and files that mix flat and RLE scanlines. ``EXPOSURE=`` lines are reported in the header
-dict but not applied (values are returned as stored, as Mitsuba and most tools do).
+Reading: the header is checked here, so a file roomlight cannot use fails with a message that
+names the problem: orientations other than ``-Y H +X W`` (rows top to bottom, columns left to
+right), XYZE files, truncated or corrupt pixel data. The pixels are decoded by Mitsuba 3's
+``mi.Bitmap`` (flat or new-style run-length-encoded scanlines); when it refuses them, one pass
+over the scanlines says which one is missing or broken. ``EXPOSURE=`` lines are reported in the
+header dict but not applied (values are returned as stored, as Mitsuba and most tools do).
 
-New-style RLE: each scanline starts with ``2, 2, W >> 8, W & 255``, then the four channels
-one after another, each as runs: a byte ``c > 128`` is followed by one value repeated
-``c - 128`` times, a byte ``0 < c <= 128`` by ``c`` literal values. Runs never cross a channel.
-Decoding is sequential by nature; to stay fast in numpy we decode *all scanlines at once*,
-one run per step (see :func:`_decode_rle`).
+Writing (``write_hdr``) rounds mantissas to nearest and run-length encodes scanlines: each
+starts with ``2, 2, W >> 8, W & 255``, then the four channels one after another, each as runs: a
+byte ``c > 128`` is followed by one value repeated ``c - 128`` times, a byte ``0 < c <= 128`` by
+``c`` literal values. Runs never cross a channel.
 """
 
 from __future__ import annotations
@@ -59,11 +59,24 @@ def read_hdr_with_header(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
     raw = np.fromfile(p, dtype=np.uint8)
     header, h, w, start = _parse_header(p, raw)
     data = raw[start:]
-    if 8 <= w <= 0x7FFF and data.size >= 4 and _is_rle_start(data, w):
-        rgbe = _decode_rle(p, data, h, w)
-    else:
-        rgbe = _decode_flat(p, data, h, w)
-    return _rgbe_to_float(rgbe), header
+    rle = 8 <= w <= 0x7FFF and data.size >= 4 and _is_rle_start(data, w)
+    if not rle and data.size < h * w * 4:
+        raise InputFileError(
+            p,
+            f"HDR pixel data is too short: {data.size} bytes for {h}x{w} flat pixels "
+            f"({h * w * 4} needed); the file is truncated or uses old-style run-length encoding "
+            "(not supported)",
+            "re-save the file with a current tool (new-style RLE or flat)",
+        )
+    import mitsuba as mi
+
+    try:
+        rgb = np.array(mi.Bitmap(str(p)), dtype=np.float32)
+    except Exception as exc:  # Mitsuba raises RuntimeError with its own wording
+        problem = _scanline_problem(data, h, w) if rle else None
+        raise InputFileError(p, problem or f"Mitsuba could not read the HDR pixel data ({exc})",
+                             "re-save the file with a current tool") from None
+    return rgb.reshape(h, w, 3), header
 
 
 def _parse_header(path, raw: np.ndarray) -> tuple[dict, int, int, int]:
@@ -124,106 +137,27 @@ def _is_rle_start(data: np.ndarray, w: int) -> bool:
     return bool(data[0] == 2 and data[1] == 2 and data[2] == (w >> 8) and data[3] == (w & 255))
 
 
-def _decode_flat(path, data: np.ndarray, h: int, w: int) -> np.ndarray:
-    need = h * w * 4
-    if data.size < need:
-        raise InputFileError(
-            path,
-            f"HDR pixel data is too short: {data.size} bytes for {h}x{w} flat pixels "
-            f"({need} needed); the file is truncated or uses old-style run-length encoding "
-            "(not supported)",
-            "re-save the file with a current tool (new-style RLE or flat)",
-        )
-    return data[:need].reshape(h, w, 4)
-
-
-def _decode_rle(path, data: np.ndarray, h: int, w: int) -> np.ndarray:
-    """Decode new-style RLE pixel data into (H, W, 4) uint8 RGBE.
-
-    Scanline starts are only known after decoding the previous scanline. We sidestep the
-    serial dependency: every byte position that *looks like* a scanline header (2, 2, W>>8,
-    W&255) becomes a candidate, all candidates are decoded in parallel one run per numpy step
-    (so the Python loop runs ~max runs per scanline times, not once per run), and finally the
-    true scanlines are picked by following the chain from byte 0 (each true scanline ends where
-    the next begins). False candidates (the pattern inside pixel data) cost a little work and
-    are discarded.
-    """
-    n = data.size
-    total = 4 * w  # decoded bytes per scanline (4 channel planes)
-    hi, lo = w >> 8, w & 255
-    pattern = (data[:-3] == 2) & (data[1:-2] == 2) & (data[2:-1] == hi) & (data[3:] == lo)
-    cand = np.flatnonzero(pattern).astype(np.int64)
-    c = cand.size
-    pos = cand + 4
-    produced = np.zeros(c, np.int64)
-    ok = np.ones(c, bool)
-    active = np.arange(c)
-    rec_id, rec_out, rec_cnt, rec_src, rec_rep = [], [], [], [], []
-    while active.size:
-        p = pos[active]
-        inside = p < n
-        b = data[np.minimum(p, n - 1)].astype(np.int64)
-        rep = b > 128
-        cnt = np.where(rep, b - 128, b)
-        room = w - produced[active] % w  # a run may not cross into the next channel
-        nxt = p + np.where(rep, 2, 1 + cnt)
-        good = inside & (cnt > 0) & (cnt <= room) & (nxt <= n)
-        ok[active[~good]] = False
-        a = active[good]
-        rec_id.append(a)
-        rec_out.append(produced[a])
-        rec_cnt.append(cnt[good])
-        rec_src.append(p[good] + 1)
-        rec_rep.append(rep[good])
-        pos[a] = nxt[good]
-        produced[a] += cnt[good]
-        active = a[produced[a] < total]
-
-    # Follow the chain of true scanlines from byte 0.
-    row_of = np.full(c, -1, np.int64)
-    s = 0
+def _scanline_problem(data: np.ndarray, h: int, w: int) -> str | None:
+    """The first missing or broken new-style RLE scanline, as a sentence (None when all decode)."""
+    n, s = data.size, 0
     for row in range(h):
-        k = int(np.searchsorted(cand, s))
-        if k >= c or cand[k] != s or not ok[k]:
-            if s >= n:
-                problem = f"HDR pixel data ends after {row} of {h} scanlines (truncated file)"
-            else:
-                problem = (
-                    f"scanline {row} of {h} (byte {s} of the pixel data) is not a valid "
-                    "new-style RLE scanline: the file is corrupt, truncated, or mixes flat and "
-                    "RLE scanlines / uses old-style RLE (not supported)"
-                )
-            raise InputFileError(path, problem, "re-save the file with a current tool")
-        row_of[k] = row
-        s = int(pos[k])
-
-    ids = np.concatenate(rec_id)
-    keep = row_of[ids] >= 0
-    rows = row_of[ids[keep]]
-    out_start = rows * total + np.concatenate(rec_out)[keep]
-    cnt = np.concatenate(rec_cnt)[keep]
-    src = np.concatenate(rec_src)[keep]
-    lit = ~np.concatenate(rec_rep)[keep]
-
-    # Expand runs to bytes: byte k of a run goes to out_start + k and comes from src + k for
-    # literal runs, from src for repeat runs. Runs tile the output, so order does not matter.
-    first = np.cumsum(cnt) - cnt
-    ramp = np.arange(int(cnt.sum()), dtype=np.int64) - np.repeat(first, cnt)
-    dest = np.repeat(out_start, cnt) + ramp
-    from_ = np.repeat(src, cnt) + ramp * np.repeat(lit, cnt)
-    planes = np.empty(h * total, np.uint8)
-    planes[dest] = data[from_]
-    # (H, 4, W) channel planes -> (H, W, 4) pixels
-    return planes.reshape(h, 4, w).transpose(0, 2, 1)
-
-
-def _rgbe_to_float(rgbe: np.ndarray) -> np.ndarray:
-    e = rgbe[..., 3].astype(np.int32)
-    m = rgbe[..., :3].astype(np.float32)
-    # float32 is exact here: 8-bit mantissa times a power of two within float32's range.
-    out = np.ldexp(m, (e - 136)[..., None])
-    out[e == 0] = 0.0
-    return out
+        if s >= n:
+            return f"HDR pixel data ends after {row} of {h} scanlines (truncated file)"
+        p = s + 4
+        ok = p <= n and _is_rle_start(data[s:], w)
+        for _ in range(4 if ok else 0):  # four channel planes of w values, in runs
+            left = w
+            while ok and left:
+                c = int(data[p]) if p < n else 0
+                count, nxt = (c - 128, p + 2) if c > 128 else (c, p + 1 + c)
+                ok = 0 < count <= left and nxt <= n
+                p, left = nxt, left - count
+        if not ok:
+            return (f"scanline {row} of {h} (byte {s} of the pixel data) is not a valid new-style RLE "
+                    "scanline: the file is corrupt, truncated, or mixes flat and RLE scanlines / uses "
+                    "old-style RLE (not supported)")
+        s = p
+    return None
 
 
 # --------------------------------------------------------------------------------------------

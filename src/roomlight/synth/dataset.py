@@ -53,6 +53,7 @@ class SynthConfig:
     workers: int = 1              #: worker processes
     nadir_cap: float = 0.0        #: simulate a tripod blind spot: black cap of this polar angle (deg)
     denoise: bool = False         #: denoise with Intel OIDN (pyoidn), light sources kept unbiased
+    scheduler: str | None = None  #: a Dask scheduler address: render on its workers instead (see roomlight.cluster)
 
 
 def split_of(seed: int, seed0: int, n: int) -> str:
@@ -174,11 +175,16 @@ def generate_dataset(out, cfg: SynthConfig, progress: bool = True) -> dict:
     seconds = []
     bar = None
     if progress:
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
-        bar = tqdm(total=len(seeds), initial=len(seeds) - len(todo), desc="synth", unit="pano")
+        bar = progress_bar(total=len(seeds), initial=len(seeds) - len(todo), desc="synth", unit="pano")
     t0 = time.perf_counter()
-    if cfg.workers > 1 and len(jobs) > 1:
+    if cfg.scheduler is not None:
+        from roomlight.cluster import map_unordered
+
+        for seed, err, sec in map_unordered(_render_to_file, jobs, cfg.scheduler):
+            _account(seed, err, sec, failures, seconds, bar)
+    elif cfg.workers > 1 and len(jobs) > 1:
         with ProcessPoolExecutor(cfg.workers) as pool:
             results = pool.map(_render_to_file, jobs)
             for seed, err, sec in results:

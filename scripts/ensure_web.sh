@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# What the viewer and its browser tests need outside Python, installed only when missing:
+#   - three.js, pinned, from npm into build/web (inlined into each viewer page when it is written);
+#   - a headless Chromium (Debian package "chromium") for the browser tests.
+# Idempotent, and never fatal: without them `roomlight view` says how to install three.js and the
+# browser tests are skipped with the reason.
+set -uo pipefail
+THREE_VERSION="${THREE_VERSION:-0.187.0}"
+here="$(cd "$(dirname "$0")/.." && pwd)"
+dest="$here/build/web"
+have="$(sed -n 's/.*"version": *"\([^"]*\)".*/\1/p' "$dest/node_modules/three/package.json" 2>/dev/null | head -1)"
+if [ "$have" != "$THREE_VERSION" ]; then
+  if command -v npm >/dev/null 2>&1; then
+    echo "roomlight: installing three@$THREE_VERSION into build/web (npm)"
+    mkdir -p "$dest"
+    npm install --prefix "$dest" --no-save --no-audit --no-fund --loglevel=error "three@$THREE_VERSION" >/dev/null \
+      || echo "roomlight: npm could not install three@$THREE_VERSION; 'roomlight view' will not work" >&2
+  else
+    echo "roomlight: npm not found; install Node.js to let 'roomlight view' inline three.js" >&2
+  fi
+fi
+if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1; then
+  if command -v apt-get >/dev/null 2>&1; then
+    SUDO=""
+    if [ "$(id -u)" != "0" ]; then
+      if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then SUDO="sudo -n"; else
+        echo "roomlight: the browser tests need Chromium; run 'apt-get install chromium' as root" >&2
+        exit 0
+      fi
+    fi
+    echo "roomlight: installing chromium for the browser tests"
+    export DEBIAN_FRONTEND=noninteractive
+    $SUDO apt-get install -y -q chromium >/dev/null 2>&1 || {
+      $SUDO apt-get update -q >/dev/null && $SUDO apt-get install -y -q chromium >/dev/null
+    } || echo "roomlight: could not install chromium; the browser tests will be skipped" >&2
+  else
+    echo "roomlight: no apt-get; install Chromium for the browser tests" >&2
+  fi
+fi
+exit 0

@@ -1,0 +1,37 @@
+"""``roomlight export``: a 2.5D area light as glTF binary, USD or OBJ + MTL for other tools."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from roomlight.export.formats import FORMATS
+
+
+@click.command("export")
+@click.argument("path", type=click.Path())
+@click.option("--format", "fmt", type=click.Choice(FORMATS), default=None,
+              help="Output format (default: from the suffix of --out).")
+@click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
+              help="The file to write (light.glb, light.usda / .usd / .usdc, light.obj).")
+def command(path, fmt, out):
+    """Export the light at PATH (an emitter bundle, fit output, sample or benchmark case).
+
+    \b
+    glb  glTF 2.0 binary: the mesh with an 8-bit sRGB emissive texture and
+         KHR_materials_emissive_strength s; radiance = srgb_to_linear(texel) * s
+    usd  UsdGeom.Mesh with a UsdPreviewSurface whose emissiveColor reads the float EXR
+    obj  OBJ + MTL (Ke s s s, map_Ke PNG)
+    Every format also writes <stem>_radiance.exr, the exact float radiance.
+    """
+    from roomlight.export import export_light, load_light
+
+    if fmt is None and Path(out).suffix.lstrip(".").lower() not in (*FORMATS, "usda", "usdc", "gltf"):
+        raise click.BadParameter(f"cannot tell the format from {out!r}; pass --format {'|'.join(FORMATS)}",
+                                 param_hint="--out")
+    light = load_light(path)
+    files = export_light(light, out, fmt)
+    click.echo(f"{light.source} -> {out}")
+    for name, p in files.items():
+        click.echo(f"  {name:<9} {p} ({p.stat().st_size / 1e3:.0f} kB)")

@@ -1,0 +1,178 @@
+"""The 2.5D area light in formats other tools read: glTF 2.0 binary, USD, OBJ + MTL.
+
+Every export writes, next to the scene file, ``<stem>_radiance.exr``: the emissive texture as
+float32 linear radiance (R, G, B), the exact values. Formats that take 8-bit textures
+(glTF, OBJ) also get ``<stem>_emission.png``: the radiance divided by its largest channel value
+``s`` (the *emissive strength*), sRGB-encoded. Radiance is recovered as
+
+    radiance = srgb_to_linear(texel / 255) × s
+
+in the bundle's units (linear Rec.709 radiance, the same numbers as ``radiance.exr``), to within
+8-bit quantisation (at most 0.45 % of ``s``). Positions are metres, y up, the capture point at
+the origin; faces face inward, so materials are double-sided.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from roomlight.export.bundle import LightSource
+
+__all__ = ["FORMATS", "emission_strength", "linear_to_srgb", "export_light"]
+
+FORMATS = ("glb", "usd", "obj")
+
+
+def linear_to_srgb(x: np.ndarray) -> np.ndarray:
+    """The sRGB transfer function (IEC 61966-2-1) on [0, 1]."""
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def emission_strength(radiance: np.ndarray) -> float:
+    """The scale that maps the radiance into [0, 1]: its largest channel value (1 for a black map)."""
+    peak = float(np.max(radiance)) if radiance.size else 0.0
+    return peak if np.isfinite(peak) and peak > 0 else 1.0
+
+
+def _write_textures(light: LightSource, out: Path, png: bool) -> dict[str, Path]:
+    from roomlight.io import save_png, write_exr
+
+    paths = {"radiance": out.with_name(f"{out.stem}_radiance.exr")}
+    r = light.radiance
+    write_exr(paths["radiance"], {"R": r[..., 0], "G": r[..., 1], "B": r[..., 2]}, half=False)
+    if png:
+        paths["emission"] = out.with_name(f"{out.stem}_emission.png")
+        texel = np.round(linear_to_srgb(r / emission_strength(r)) * 255).astype(np.uint8)
+        save_png(paths["emission"], texel)
+    return paths
+
+
+def _extras(light: LightSource, files: dict[str, Path]) -> dict:
+    return {"source": light.source, "emissive_strength": emission_strength(light.radiance),
+            "radiance_exr": files["radiance"].name, "resolution": list(light.radiance.shape[:2]),
+            "units": "metres; linear Rec.709 radiance = srgb_to_linear(texel) * emissive_strength"}
+
+
+def _write_glb(light: LightSource, out: Path) -> dict[str, Path]:
+    import pygltflib as g
+
+    files = _write_textures(light, out, png=True)
+    png = files["emission"].read_bytes()
+    pos = np.ascontiguousarray(light.vertices, np.float32)
+    uv = np.ascontiguousarray(light.uv, np.float32)
+    idx = np.ascontiguousarray(light.faces, np.uint32).reshape(-1)
+    blobs = [pos.tobytes(), uv.tobytes(), idx.tobytes(), png]
+    views, offset = [], 0
+    for blob, target in zip(blobs, (g.ARRAY_BUFFER, g.ARRAY_BUFFER, g.ELEMENT_ARRAY_BUFFER, None)):
+        views.append(g.BufferView(buffer=0, byteOffset=offset, byteLength=len(blob), target=target))
+        offset += (len(blob) + 3) // 4 * 4
+    data = b"".join(b + b"\0" * ((-len(b)) % 4) for b in blobs)
+    strength = emission_strength(light.radiance)
+    material = g.Material(
+        name="roomlight_area_light", doubleSided=True, emissiveFactor=[1.0, 1.0, 1.0],
+        emissiveTexture=g.TextureInfo(index=0),
+        pbrMetallicRoughness=g.PbrMetallicRoughness(baseColorFactor=[0, 0, 0, 1], metallicFactor=0.0,
+                                                    roughnessFactor=1.0),
+        extensions={"KHR_materials_emissive_strength": {"emissiveStrength": strength}})
+    gltf = g.GLTF2(
+        asset=g.Asset(generator="roomlight", version="2.0"),
+        extensionsUsed=["KHR_materials_emissive_strength"],
+        scene=0, scenes=[g.Scene(nodes=[0])], nodes=[g.Node(mesh=0, name="area_light")],
+        meshes=[g.Mesh(name="area_light", primitives=[g.Primitive(
+            attributes=g.Attributes(POSITION=0, TEXCOORD_0=1), indices=2, material=0)])],
+        accessors=[
+            g.Accessor(bufferView=0, componentType=g.FLOAT, count=len(pos), type=g.VEC3,
+                       min=pos.min(0).tolist(), max=pos.max(0).tolist()),
+            g.Accessor(bufferView=1, componentType=g.FLOAT, count=len(uv), type=g.VEC2),
+            g.Accessor(bufferView=2, componentType=g.UNSIGNED_INT, count=len(idx), type=g.SCALAR),
+        ],
+        bufferViews=views, buffers=[g.Buffer(byteLength=len(data))],
+        images=[g.Image(bufferView=3, mimeType="image/png", name="emission")],
+        # u wraps (the seam column has u = 1 + 0.5/W), v stops at the poles
+        samplers=[g.Sampler(magFilter=g.LINEAR, minFilter=g.LINEAR, wrapS=g.REPEAT, wrapT=g.CLAMP_TO_EDGE)],
+        textures=[g.Texture(source=0, sampler=0)], materials=[material],
+        extras={"roomlight": _extras(light, files)})
+    gltf.set_binary_blob(data)
+    gltf.save_binary(str(out))
+    files["emission"].unlink()  # it is inside the .glb
+    del files["emission"]
+    return {"scene": out, **files}
+
+
+def _write_usd(light: LightSource, out: Path) -> dict[str, Path]:
+    from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt
+
+    files = _write_textures(light, out, png=False)
+    stage = Usd.Stage.CreateNew(str(out))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    world = UsdGeom.Xform.Define(stage, "/World")
+    stage.SetDefaultPrim(world.GetPrim())
+    mesh = UsdGeom.Mesh.Define(stage, "/World/AreaLight")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(light.vertices, np.float32)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(light.faces), 3, np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(light.faces, np.int32).ravel()))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    mesh.CreateDoubleSidedAttr(True)
+    # USD's texture origin is the image's bottom-left corner: t = 1 - v
+    st = np.stack([light.uv[:, 0], 1.0 - light.uv[:, 1]], -1).astype(np.float32)
+    UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                            UsdGeom.Tokens.vertex).Set(Vt.Vec2fArray.FromNumpy(st))
+    mat = UsdShade.Material.Define(stage, "/World/Looks/AreaLightMaterial")
+    surf = UsdShade.Shader.Define(stage, "/World/Looks/AreaLightMaterial/Surface")
+    surf.CreateIdAttr("UsdPreviewSurface")
+    surf.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(0, 0, 0))
+    surf.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(1.0)
+    reader = UsdShade.Shader.Define(stage, "/World/Looks/AreaLightMaterial/StReader")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
+    tex = UsdShade.Shader.Define(stage, "/World/Looks/AreaLightMaterial/Radiance")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(files["radiance"].name)
+    tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
+    tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("repeat")
+    tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("clamp")
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+    tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
+    surf.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(tex.ConnectableAPI(), "rgb")
+    mat.CreateSurfaceOutput().ConnectToSource(surf.ConnectableAPI(), "surface")
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
+    world.GetPrim().SetCustomDataByKey("roomlight", json.dumps(_extras(light, files)))
+    stage.GetRootLayer().Save()
+    return {"scene": out, **files}
+
+
+def _write_obj(light: LightSource, out: Path) -> dict[str, Path]:
+    files = _write_textures(light, out, png=True)
+    mtl = out.with_suffix(".mtl")
+    s = emission_strength(light.radiance)
+    mtl.write_text(
+        "# roomlight 2.5D area light: emission = srgb_to_linear(map_Ke texel) * Ke\n"
+        f"# exact float radiance: {files['radiance'].name}\n"
+        "newmtl area_light\nKa 0 0 0\nKd 0 0 0\nKs 0 0 0\nillum 0\n"
+        f"Ke {s:.9g} {s:.9g} {s:.9g}\nmap_Ke {files['emission'].name}\n")
+    st = np.stack([light.uv[:, 0], 1.0 - light.uv[:, 1]], -1)  # OBJ's vt origin is the bottom-left
+    f = light.faces.astype(np.int64) + 1
+    with open(out, "w") as fh:
+        fh.write(f"# roomlight 2.5D area light from {light.source}\n# metres, y up, faces point inward\n"
+                 f"mtllib {mtl.name}\no area_light\n")
+        np.savetxt(fh, light.vertices, fmt="v %.9g %.9g %.9g")
+        np.savetxt(fh, st, fmt="vt %.9g %.9g")
+        fh.write("usemtl area_light\n")
+        np.savetxt(fh, np.repeat(f, 2, axis=1), fmt="f %d/%d %d/%d %d/%d")
+    return {"scene": out, "material": mtl, **files}
+
+
+def export_light(light: LightSource, out, fmt: str | None = None) -> dict[str, Path]:
+    """Write ``light`` to ``out`` as ``fmt`` (default: from the suffix); returns the files written."""
+    out = Path(out)
+    fmt = (fmt or out.suffix.lstrip(".")).lower()
+    fmt = {"usda": "usd", "usdc": "usd", "gltf": "glb"}.get(fmt, fmt)
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown export format {fmt!r}; choose one of {', '.join(FORMATS)}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return {"glb": _write_glb, "usd": _write_usd, "obj": _write_obj}[fmt](light, out)
