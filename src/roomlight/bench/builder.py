@@ -23,13 +23,14 @@ from __future__ import annotations
 import json
 import re
 import zlib
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from roomlight.bench.errors import BenchError
+from roomlight.config import StrictConfig
 from roomlight.bench.placement import (
     STRATA,
     EmitterProbe,
@@ -56,7 +57,7 @@ GT_SEEDS = {"input": 0, "eval": 1 << 20}
 
 
 @dataclass(frozen=True)
-class BenchConfig:
+class BenchConfig(StrictConfig):
     """Settings of ``roomlight bench make``; the defaults are small enough for a CPU.
 
     The paper: ``emitter_height=512, width=height=1000, spp=4096``.
@@ -93,7 +94,8 @@ class BenchConfig:
         return d
 
     def override(self, **changes) -> BenchConfig:
-        return replace(self, **{k: v for k, v in changes.items() if v is not None})
+        """A copy with the fields that are not None changed; unknown names and wrong types are refused."""
+        return super().override(**{k: v for k, v in changes.items() if v is not None})
 
 
 def _safe_name(stem: str) -> str:
@@ -299,16 +301,41 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
     return manifest
 
 
+_MANIFEST_KEYS = ("version", "config", "panoramas", "scenes")
+_SCENE_KEYS = {"id": str, "panorama": str, "material": str, "scene": str, "exposure": (int, float),
+               "saturated_fraction": dict, "mask_pixels": dict}
+
+
 def read_manifest(bench_dir) -> dict:
-    """The manifest of a benchmark directory (errors name the file)."""
+    """The manifest of a benchmark directory (errors name the file and the field's path)."""
+    from roomlight.config import ConfigError, check_keys
+
     p = Path(bench_dir)
     f = p / MANIFEST if p.is_dir() else p
     if not f.is_file():
         raise BenchError(f"{f}: no benchmark manifest (build one with `roomlight bench make`)")
     try:
         m = json.loads(f.read_text())
-    except ValueError as exc:
+    except (ValueError, UnicodeDecodeError) as exc:
         raise BenchError(f"{f}: not valid JSON: {exc}") from None
     if not isinstance(m, dict) or not isinstance(m.get("scenes"), list):
         raise BenchError(f"{f}: not a benchmark manifest (no 'scenes' list)")
+    try:
+        check_keys(m, _MANIFEST_KEYS, "manifest")
+        if m.get("version", MANIFEST_VERSION) != MANIFEST_VERSION:
+            raise ConfigError(f"manifest.version: this roomlight reads version {MANIFEST_VERSION}, "
+                              f"got {m.get('version')!r}")
+        if "config" in m:
+            BenchConfig.from_dict(m["config"], where="manifest.config")
+        for i, s in enumerate(m["scenes"]):
+            where = f"manifest.scenes[{i}]"
+            check_keys(s, _SCENE_KEYS, where)
+            for key, kind in _SCENE_KEYS.items():
+                if key in ("id", "panorama", "material", "scene") and key not in s:
+                    raise ConfigError(f"{where}.{key}: missing (required)")
+                if key in s and (not isinstance(s[key], kind) or isinstance(s[key], bool)):
+                    raise ConfigError(f"{where}.{key}: expected {getattr(kind, '__name__', 'a number')}, "
+                                      f"got {s[key]!r}")
+    except ConfigError as exc:
+        raise BenchError(f"{f}: {exc}") from None
     return m

@@ -12,8 +12,9 @@ the list of differing fields.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import dataclass, field
 
+from roomlight.config import StrictConfig, checked_fields
 from roomlight.errors import RoomlightError
 from roomlight.losses import LossConfig
 from roomlight.model.config import ModelConfig, get_preset
@@ -22,7 +23,7 @@ __all__ = ["TrainConfig", "TRAIN_PRESETS", "get_train_preset", "RESUME_SAFE_FIEL
 
 
 @dataclass(frozen=True)
-class TrainConfig:
+class TrainConfig(StrictConfig):
     """Everything that defines a training run of :class:`~roomlight.model.PanoVAE`."""
 
     #: Model architecture preset name (``default`` = the paper's network, ``small``, ``tiny``).
@@ -119,10 +120,7 @@ class TrainConfig:
             raise bad("compile", "use 'auto', 'on' or 'off'")
         if not 0.0 <= self.aug_tilt_deg <= 90.0:
             raise bad("aug_tilt_deg", "must be in [0, 90] degrees")
-        try:
-            LossConfig.from_dict(self.loss)
-        except TypeError as e:
-            raise bad("loss", f"not a valid LossConfig ({e})") from None
+        LossConfig.from_dict(self.loss, where="TrainConfig.loss")  # names the entry and its type
 
     # ------------------------------------------------------------------ derived
     @property
@@ -136,30 +134,16 @@ class TrainConfig:
         return LossConfig.from_dict(self.loss)
 
     # ------------------------------------------------------------------ (de)serialisation
-    def to_dict(self) -> dict:
-        """JSON-friendly dict (tuples become lists)."""
-        d = asdict(self)
-        d["betas"] = list(self.betas)
-        return d
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "TrainConfig":
-        """Inverse of :meth:`to_dict`; unknown keys are an error (usually a typo)."""
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(d) - known)
-        if unknown:
-            raise RoomlightError(f"TrainConfig: unknown field(s) {unknown}; expected a subset of {sorted(known)}")
-        return cls(**d)
+    # to_dict / from_dict come from StrictConfig: unknown fields and wrong types are refused with
+    # the field's path and, for a misspelt name, the closest valid one.
 
     def replace(self, **overrides) -> "TrainConfig":
         """A copy with some fields replaced (``loss`` entries may be given as ``loss={...}``, merged)."""
-        if "loss" in overrides:
+        if isinstance(overrides.get("loss"), dict):
             overrides["loss"] = {**self.loss, **overrides["loss"]}
-        known = {f.name for f in fields(self)}
-        unknown = sorted(set(overrides) - known)
-        if unknown:
-            raise RoomlightError(f"TrainConfig: unknown field(s) {unknown}")
-        return dataclasses.replace(self, **overrides)
+        return dataclasses.replace(self, **checked_fields(type(self), overrides))
+
+    override = replace
 
 
 #: Fields that may differ when a run is resumed: they change logging, speed or book-keeping, not
