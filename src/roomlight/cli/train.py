@@ -37,8 +37,8 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
             sets, time_budget, until_step, print_config):
     """Train the illumination prior on panoramas in --data, writing the run to --out.
 
-    Interrupting (Ctrl-C) saves a checkpoint; running the same command again continues exactly
-    where it stopped. Resuming with settings that change the optimisation is refused and the
+    Interrupting (Ctrl-C or SIGTERM) finishes the current step and saves a checkpoint; running the
+    same command again continues exactly where it stopped, as if it had not been interrupted. Resuming with settings that change the optimisation is refused and the
     differing fields are named. Several GPUs:
 
     \b
@@ -58,8 +58,8 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
     trainer = Trainer(cfg, data_dir, run_dir, device=device)
     try:
         summary = trainer.fit(until=until_step, time_budget_s=None if time_budget is None else 60.0 * time_budget)
-    except KeyboardInterrupt:
-        raise SystemExit(130) from None
+    except KeyboardInterrupt as exc:  # a checkpoint of the last complete step was written
+        raise SystemExit(128 + getattr(exc, "signum", 2)) from None
     finally:
         trainer.close()
     if trainer.dist.is_main:

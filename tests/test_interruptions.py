@@ -1,0 +1,130 @@
+"""Long commands killed at a random point (SIGINT, SIGTERM, SIGKILL), then re-run, against an
+uninterrupted run: the same result, bit for bit where the command is deterministic, and no item
+lost or duplicated.
+
+Each command runs in a child process (``python -m roomlight.cli.main``) so that the signal reaches
+it exactly as a user's Ctrl-C, a scheduler's SIGTERM or the out-of-memory killer's SIGKILL would.
+The point of the kill is random within the run (after the first sign of progress, plus a random
+delay), seeded so that a failure can be replayed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from safetensors.torch import load_file
+
+from roomlight.data import write_toy_dataset
+
+ENV = {**os.environ, "OMP_NUM_THREADS": "1", "ROOMLIGHT_THREADS": "1",
+       "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[1] / "src"), os.environ.get("PYTHONPATH", "")])}
+
+
+def roomlight(*args, check=True, timeout=300) -> subprocess.CompletedProcess:
+    r = subprocess.run([sys.executable, "-m", "roomlight.cli.main", *map(str, args)], env=ENV, text=True,
+                       capture_output=True, timeout=timeout)
+    if check:
+        assert r.returncode == 0, r.stderr[-3000:]
+    return r
+
+
+def kill_when(args, ready, sig: int, seed: int, max_delay: float, timeout: float = 240.0):
+    """Start ``roomlight ARGS``, wait until ``ready()`` is true, wait a random delay, send ``sig``.
+
+    Returns (exit status, stderr). The process must still be running when the signal is sent,
+    otherwise the test would not test an interruption.
+    """
+    proc = subprocess.Popen([sys.executable, "-m", "roomlight.cli.main", *map(str, args)], env=ENV, text=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    t_end = time.monotonic() + timeout
+    while not ready():
+        assert proc.poll() is None, f"finished before it could be interrupted: {proc.stderr.read()[-2000:]}"
+        assert time.monotonic() < t_end, "never became ready"
+        time.sleep(0.02)
+    time.sleep(random.Random(seed).uniform(0.0, max_delay))
+    assert proc.poll() is None, "finished before the signal"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    return proc.returncode, err
+
+
+def train_steps(run: Path) -> list[int]:
+    log = run / "log.jsonl"
+    if not log.exists():
+        return []
+    out = []
+    for line in log.read_text().splitlines():
+        try:
+            rec = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if rec.get("event") == "train":
+            out.append(rec["step"])
+    return out
+
+
+def final_weights(run: Path, step: int) -> dict:
+    return load_file(str(run / "checkpoints" / f"step-{step:08d}" / "model.safetensors"))
+
+
+def assert_bit_identical(a: dict, b: dict) -> None:
+    assert a.keys() == b.keys()
+    differing = [k for k in a if not (a[k].shape == b[k].shape and bool((a[k] == b[k]).all()))]
+    assert not differing, f"{len(differing)} tensors differ, e.g. {differing[:3]}"
+
+
+STEPS = 40
+TRAIN_ARGS = ["--config", "tiny", "--max-steps", STEPS, "--workers", 0, "--no-cache", "--set", "progress=false",
+              "--set", "log_every=1", "--set", "val_fraction=0", "--set", "val_every=0", "--set", "ckpt_every=1000"]
+
+
+@pytest.fixture(scope="module")
+def toy(tmp_path_factory):
+    root = tmp_path_factory.mktemp("toy")
+    write_toy_dataset(root, 8, 32)
+    return root
+
+
+@pytest.fixture(scope="module")
+def straight_run(toy, tmp_path_factory):
+    run = tmp_path_factory.mktemp("straight") / "run"
+    roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
+    assert train_steps(run) == list(range(1, STEPS + 1))
+    return run
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_train_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_path, sig):
+    run = tmp_path / "run"
+    code, err = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], lambda: len(train_steps(run)) >= 2,
+                          sig, seed=int(sig), max_delay=0.3)
+    assert code == 128 + sig, err[-2000:]
+    assert "Traceback" not in err
+    stopped = max(train_steps(run))
+    assert stopped < STEPS
+    assert (run / "checkpoints" / f"step-{stopped:08d}").is_dir(), "the last logged step is the one checkpointed"
+    r = roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
+    assert f"step {stopped} of {STEPS}" in r.stderr + r.stdout
+    assert train_steps(run) == list(range(1, STEPS + 1))
+    assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
+
+
+def test_train_killed_before_its_first_checkpoint_starts_afresh(toy, straight_run, tmp_path):
+    run = tmp_path / "run"
+    code, _ = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], lambda: len(train_steps(run)) >= 2,
+                        signal.SIGKILL, seed=9, max_delay=0.3)
+    assert code == -signal.SIGKILL
+    assert not (run / "checkpoints").exists() or not any((run / "checkpoints").glob("step-*"))
+    assert train_steps(run), "the killed run had logged steps"
+    r = roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
+    assert "no checkpoint to resume from; starting afresh at step 0" in r.stderr + r.stdout
+    assert train_steps(run) == list(range(1, STEPS + 1))  # each step once
+    assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
