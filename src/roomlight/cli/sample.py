@@ -7,8 +7,10 @@ from pathlib import Path
 
 import click
 
+from roomlight.cli.common import parse_sets, sets_option
 
-def _encode_file(model, path, fit_steps: int):
+
+def _encode_file(model, path, fit_steps: int, sets: dict):
     """Latent (D,) of a panorama file: the encoder's mean, refined by a latent fit if fit_steps > 0."""
     import torch
 
@@ -21,7 +23,8 @@ def _encode_file(model, path, fit_steps: int):
     with torch.no_grad():
         z = model.encode(rad[None].to(device), dep[None].to(device)).mean
     if fit_steps > 0:
-        z = fit_latent(model, rad[None].to(device), dep[None].to(device), LatentFitConfig(steps=fit_steps), z0=z).z
+        z = fit_latent(model, rad[None].to(device), dep[None].to(device), LatentFitConfig(steps=fit_steps).override(**sets),
+                       z0=z).z
     return z[0].cpu()
 
 
@@ -45,8 +48,9 @@ def _encode_file(model, path, fit_steps: int):
 @click.option("--spp", type=int, default=32, show_default=True)
 @click.option("--emitters/--no-emitters", default=True, show_default=True,
               help="Write each sample as a 2.5D area light bundle (PLY + EXR + scene.xml).")
+@sets_option("LatentFitConfig of --fit-steps")
 def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fit_steps, render, render_res, spp,
-            emitters):
+            emitters, sets):
     """Decode z ~ N(0, I) into panoramas: EXRs, 2.5D area lights and a figure (paper Fig. 3).
 
     \b
@@ -66,13 +70,17 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
     from roomlight.io import write_exr, write_panorama
     from roomlight.model.runs import load_run_model
 
+    sets = parse_sets(sets)
+    from roomlight.fit import LatentFitConfig
+
+    LatentFitConfig().override(**sets)  # refuse a bad --set before any work
     model = load_run_model(model_path)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     units = model.metadata.get("depth_units", "metres")
     if interpolate:
         a, b = interpolate
-        z = interpolate_latents(_encode_file(model, a, fit_steps), _encode_file(model, b, fit_steps), count, mode)
+        z = interpolate_latents(_encode_file(model, a, fit_steps, sets), _encode_file(model, b, fit_steps, sets), count, mode)
         rad, dep = decode_latents(model, z)
         for i in range(count):
             write_panorama(out / f"interp_{i:03d}.exr", (rad[i], dep[i, 0]), half=False,

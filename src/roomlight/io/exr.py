@@ -130,8 +130,8 @@ def read_exr(path: str | os.PathLike) -> dict[str, np.ndarray]:
 def write_exr(
     path: str | os.PathLike,
     channels: Mapping[str, np.ndarray],
-    half: bool | set[str] | frozenset[str] = False,
     *,
+    half: bool | set[str] | frozenset[str] = False,
     attributes: Mapping[str, object] | None = None,
     compression: str = "zip",
 ) -> None:

@@ -230,7 +230,7 @@ def _rgbe_to_float(rgbe: np.ndarray) -> np.ndarray:
 # Writing
 
 
-def write_hdr(path: str | os.PathLike, rgb: np.ndarray, rle: bool = True) -> None:
+def write_hdr(path: str | os.PathLike, rgb: np.ndarray, *, rle: bool = True) -> None:
     """Write (H, W, 3) linear RGB to a Radiance ``.hdr`` file (orientation ``-Y H +X W``).
 
     Mantissas are rounded to nearest (relative error <= 0.5/128 of a pixel's largest channel);

@@ -84,6 +84,11 @@ def ensure_variant(prefer: str | None = None) -> str:
         raise BackendError(f"this Mitsuba build has no variant {name!r}; available: {', '.join(mi.variants())}")
     mi.set_variant(name)
     _active = name
+    threads = os.environ.get("ROOMLIGHT_THREADS", "")
+    if threads.isdigit() and int(threads) > 0 and name.startswith("llvm"):
+        import drjit as dr
+
+        dr.set_thread_count(int(threads))  # the command line's thread policy (roomlight.cli.threads)
     return name
 
 

@@ -12,6 +12,7 @@ the list of differing fields.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 
 from roomlight.config import StrictConfig, checked_fields
@@ -56,6 +57,10 @@ class TrainConfig(StrictConfig):
     aug_tilt_deg: float = 7.0
     #: Exposure-calibrate each panorama to unit log-average luminance when loading.
     calibrate: bool = True
+    #: Clamp negative radiance to 0 when loading (the count is reported); otherwise such files are skipped.
+    clamp_negative: bool = False
+    #: Replace NaN/inf radiance by this value when loading (reported); None skips such files.
+    fill_nonfinite: float | None = None
     #: Depth units fed to the network: ``metres`` (as stored) or ``scale-free`` (geometric mean 1).
     depth_units: str = "metres"
     #: Share of files held out for validation when the data folder has no train/ val/ folders.
@@ -118,6 +123,8 @@ class TrainConfig(StrictConfig):
             raise bad("amp", "use 'auto', 'bf16' or 'off'")
         if self.compile not in ("auto", "on", "off"):
             raise bad("compile", "use 'auto', 'on' or 'off'")
+        if self.fill_nonfinite is not None and not math.isfinite(self.fill_nonfinite):
+            raise bad("fill_nonfinite", "must be a finite number or None")
         if not 0.0 <= self.aug_tilt_deg <= 90.0:
             raise bad("aug_tilt_deg", "must be in [0, 90] degrees")
         LossConfig.from_dict(self.loss, where="TrainConfig.loss")  # names the entry and its type

@@ -122,14 +122,15 @@ class Trainer:
         if cfg.cache:
             files = splits["train"] + splits["val"]
             path = self._cache_path()
+            pack = dict(path=path, dtype=cfg.cache_dtype, calibrate=cfg.calibrate, depth_units=cfg.depth_units,
+                        clamp_negative=cfg.clamp_negative, fill_nonfinite=cfg.fill_nonfinite)
             if self.dist.is_main:
-                PackedCache.open_or_build(self.data_dir, files, res, path=path, dtype=cfg.cache_dtype,
-                                          calibrate=cfg.calibrate, depth_units=cfg.depth_units,
-                                          workers=cfg.num_workers, progress=cfg.progress, log=self.note)
+                PackedCache.open_or_build(self.data_dir, files, res, workers=cfg.num_workers, progress=cfg.progress,
+                                          log=self.note, **pack)
             barrier(self.dist)
-            cache = PackedCache.open_or_build(self.data_dir, files, res, path=path, dtype=cfg.cache_dtype,
-                                              calibrate=cfg.calibrate, depth_units=cfg.depth_units, progress=False)
-        kw = dict(root=self.data_dir, calibrate=cfg.calibrate, depth_units=cfg.depth_units, cache=cache)
+            cache = PackedCache.open_or_build(self.data_dir, files, res, progress=False, **pack)
+        kw = dict(root=self.data_dir, calibrate=cfg.calibrate, depth_units=cfg.depth_units, cache=cache,
+                  clamp_negative=cfg.clamp_negative, fill_nonfinite=cfg.fill_nonfinite)
         self.train_set = PanoramaDataset(splits["train"], res, **kw)
         self.val_set = PanoramaDataset(splits["val"], res, **kw) if splits["val"] else None
         batch = cfg.batch_size
@@ -159,7 +160,14 @@ class Trainer:
         norm_path = self.run_dir / "normalization.json"
         if not norm_path.exists() and self.dist.is_main:
             self.note(f"computing normalisation statistics over {len(self.train_set)} training panoramas")
-            norm, skipped = normalization_from_dataset(self.train_set, progress=cfg.progress)
+            from roomlight.data.stats import NoUsablePanorama
+
+            try:
+                norm, skipped = normalization_from_dataset(self.train_set, progress=cfg.progress)
+            except NoUsablePanorama as exc:
+                for name, why in exc.skipped:
+                    self.note(f"skipping {name}: {why}")
+                raise RoomlightError(f"no usable panorama in {self.data_dir}") from None
             for name, why in skipped:
                 self.note(f"skipping {name}: {why}")
             ck.atomic_write_text(norm_path, json.dumps(norm.to_dict(), indent=2) + "\n")
@@ -381,11 +389,12 @@ class Trainer:
 
     # ------------------------------------------------------------------ the loop
     def _report_skipped(self, skipped) -> None:
-        for name, why in skipped:
+        """Each skipped file (name, reason) and repaired file (name, None, repair) once per run."""
+        for name, why, *fix in skipped:
             if name not in self._reported:
                 self._reported.add(name)
-                self.note(f"skipping {name}: {why}")
-                self.log.event("skipped", self.step, file=name, reason=why)
+                self.note(f"note: {fix[0]}" if fix else f"skipping {name}: {why}")
+                self.log.event("repaired" if fix else "skipped", self.step, file=name, reason=fix[0] if fix else why)
 
     def fit(self, until: int | None = None, time_budget_s: float | None = None) -> dict:
         """Train up to step ``until`` (default: the end of the schedule); returns a summary.
@@ -427,7 +436,7 @@ class Trainer:
             while self.step < stop:
                 batch = next(it)
                 self.position += 1
-                self._report_skipped(batch["skipped"])
+                self._report_skipped(batch["skipped"] + [(n, None, fix) for n, fix in batch.get("fixes", [])])
                 if broadcast_flag(batch["radiance"] is None, self.dist):
                     continue
                 out = self.train_step(batch["radiance"], batch["depth"], batch["names"])
