@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import zlib
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -174,8 +175,8 @@ def build_panorama(path: Path, out_dir: Path, config: BenchConfig, progress=None
 
     name = _safe_name(path.stem)
     pano_dir = out_dir / name
+    radiance, depth = load_emitter_panorama(path, config.emitter_height)  # refused before anything is written
     pano_dir.mkdir(parents=True, exist_ok=True)
-    radiance, depth = load_emitter_panorama(path, config.emitter_height)
     rng = np.random.default_rng([config.seed, zlib.crc32(name.encode())])
     shapes = list(config.shapes)
     if len(shapes) < 2:
@@ -274,6 +275,7 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
     if len(set(names)) != len(names):
         raise BenchError(f"--panos {panos}: two panoramas map to the same scene name; rename them")
     out = Path(out_dir)
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     bar = None
     if progress:
@@ -287,7 +289,15 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
             if rec is None:
                 if bar is not None:
                     bar.set_postfix_str(name)
-                rec = build_panorama(f, out, config, bar)
+                try:
+                    rec = build_panorama(f, out, config, bar)
+                except BaseException:
+                    # Built panoramas stay (a re-run reuses them); the one that failed leaves nothing.
+                    if (out / name).is_dir() and _done_record(out / name, config) is None:
+                        shutil.rmtree(out / name, ignore_errors=True)
+                    if created and not any(out.iterdir()):
+                        out.rmdir()
+                    raise
             elif bar is not None:
                 bar.update(len(config.materials))
             records.append(rec)
