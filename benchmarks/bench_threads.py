@@ -1,10 +1,11 @@
-"""The command line's thread policy against torch's defaults, on an idle machine and next to a busy process.
+"""The command line's thread policy against torch's defaults, as found and next to a busy process.
 
 The workload is the core of ``roomlight fit-pano``: a latent fit of the bundled prior to the
 built-in example room (``--steps`` Adam steps of decoder forward + backward), in a fresh process
 per measurement so that OpenMP's settings take effect:
 
 - ``before``: torch's defaults (as many threads as the machine has, OpenMP's spinning wait);
+- ``passive``: torch's thread count, but OpenMP threads that sleep when idle;
 - ``after``: roomlight's policy (``roomlight.cli.threads``: passive waiting, threads from the
   CPUs available less the busy ones).
 
@@ -29,6 +30,8 @@ from pathlib import Path
 
 CHILD = r"""
 import json, os, sys, time
+if os.environ.get("BENCH_POLICY") == "passive":
+    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 if os.environ.get("BENCH_POLICY") == "after":
     from roomlight.cli.threads import apply_thread_policy, measured_threads, prepare_environment
     prepare_environment()
@@ -84,7 +87,7 @@ def main() -> None:
     args = ap.parse_args()
 
     rows = []
-    for load in ("idle", "under load"):
+    for load in ("as found", "under load"):
         stop = multiprocessing.Event()
         spinners = []
         if load == "under load":
@@ -94,21 +97,22 @@ def main() -> None:
             time.sleep(0.5)
         try:
             before = measure("before", args.steps, args.repeats)
+            passive = measure("passive", args.steps, args.repeats)
             after = measure("after", args.steps, args.repeats)
         finally:
             stop.set()
             for p in spinners:
                 p.join()
-        rows.append((load, before, after))
+        rows.append((load, before, passive, after))
 
     print(f"Latent fit of the bundled prior, {args.steps} steps; median of {args.repeats}; "
           f"{os.cpu_count()} CPUs, load average before the run {os.getloadavg()[0]:.2f}\n")
-    print("| machine | before: torch defaults | after: roomlight's policy | speed-up |")
-    print("|---|---:|---:|---:|")
-    for load, b, a in rows:
-        label = load if load == "idle" else f"{load} ({args.busy} busy process{'es' if args.busy > 1 else ''})"
-        print(f"| {label} | {b['seconds']:.2f} s ({b['threads']} threads, {b['wait']} wait) | "
-              f"{a['seconds']:.2f} s ({a['threads']} threads, {a['wait']} wait) | {b['seconds'] / a['seconds']:.1f}× |")
+    print("| machine | before: torch defaults | passive waiting only | after: roomlight's policy | speed-up |")
+    print("|---|---:|---:|---:|---:|")
+    for load, *cols in rows:
+        label = load if load == "as found" else f"{load} (+{args.busy} busy process{'es' if args.busy > 1 else ''})"
+        cells = " | ".join(f"{c['seconds']:.2f} s ({c['threads']} thr., {c['wait'].lower()})" for c in cols)
+        print(f"| {label} | {cells} | {cols[0]['seconds'] / cols[-1]['seconds']:.1f}× |")
 
 
 if __name__ == "__main__":

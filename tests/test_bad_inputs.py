@@ -303,3 +303,21 @@ def test_wrongly_typed_or_unknown_training_settings(workspace, tmp_path, setting
     assert_one_clean_line(r, named)
     assert hint in r.stderr
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("kind", ["truncated", "wrong-magic", "nan"])
+def test_a_real_process_prints_one_line_and_nothing_else(tmp_path, kind):
+    """The C libraries behind the readers write their own complaints to the terminal; a real
+    process (not the in-process runner above) must still show only roomlight's line."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bad = PANORAMAS[kind](tmp_path / f"broken-{kind}.exr")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[1] / "src"),
+                                                         os.environ.get("PYTHONPATH", "")])}
+    r = subprocess.run([sys.executable, "-m", "roomlight.cli.main", "emitter", str(bad), "--out", str(tmp_path / "o")],
+                       env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and r.stdout == ""
+    assert len(r.stderr.splitlines()) == 1 and r.stderr.startswith("error: ") and bad.name in r.stderr, r.stderr

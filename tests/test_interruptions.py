@@ -81,7 +81,7 @@ def assert_bit_identical(a: dict, b: dict) -> None:
     assert not differing, f"{len(differing)} tensors differ, e.g. {differing[:3]}"
 
 
-STEPS = 40
+STEPS = 30
 TRAIN_ARGS = ["--config", "tiny", "--max-steps", STEPS, "--workers", 0, "--no-cache", "--set", "progress=false",
               "--set", "log_every=1", "--set", "val_fraction=0", "--set", "val_every=0", "--set", "ckpt_every=1000"]
 
@@ -128,3 +128,107 @@ def test_train_killed_before_its_first_checkpoint_starts_afresh(toy, straight_ru
     assert "no checkpoint to resume from; starting afresh at step 0" in r.stderr + r.stdout
     assert train_steps(run) == list(range(1, STEPS + 1))  # each step once
     assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
+
+
+# ----------------------------------------------------------------------------- synth, bench make, bench run
+ALL_SIGNALS = pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL],
+                                      ids=["SIGINT", "SIGTERM", "SIGKILL"])
+
+
+def exr_pixels(root: Path, pattern: str) -> dict:
+    """{relative path: {channel: array}} of every finished EXR under ``root``."""
+    from roomlight.io import read_exr
+
+    return {p.relative_to(root).as_posix(): read_exr(p) for p in sorted(root.glob(pattern))
+            if ".partial" not in p.name and not p.name.startswith(".")}
+
+
+def assert_same_exrs(a: dict, b: dict) -> None:
+    assert sorted(a) == sorted(b), "lost or extra files"
+    for name in a:
+        for ch in a[name]:
+            assert (a[name][ch] == b[name][ch]).all(), f"{name} channel {ch} differs"
+
+
+def interrupt_and_rerun(args, out: Path, ready, sig: int, seed: int):
+    code, err = kill_when(args, ready, sig, seed=seed, max_delay=1.0)
+    assert code != 0, "the command was interrupted"
+    assert "Traceback" not in err or sig != signal.SIGKILL
+    roomlight(*args)
+
+
+SYNTH = ["synth", "--n", 3, "--res", "16x32", "--spp", 4, "--no-denoise", "--workers", 1, "--no-summary"]
+
+
+@pytest.fixture(scope="module")
+def synth_straight(tmp_path_factory):
+    out = tmp_path_factory.mktemp("synth") / "rooms"
+    roomlight(*SYNTH, "--out", out)
+    return exr_pixels(out, "**/*.exr")
+
+
+@pytest.mark.mitsuba
+@ALL_SIGNALS
+def test_synth_interrupted_then_rerun_renders_every_room_once_and_identically(synth_straight, tmp_path, sig):
+    out = tmp_path / "rooms"
+    interrupt_and_rerun([*SYNTH, "--out", out], out, lambda: any(out.glob("**/*.exr")), sig, seed=int(sig))
+    assert_same_exrs(exr_pixels(out, "**/*.exr"), synth_straight)
+    assert not list(out.glob("**/*.partial.exr")), "a partial file was left behind"
+
+
+def bench_make_args(panos, out):
+    return ["bench", "make", "--panos", panos, "--out", out, "--n", 2, "--emitter-res", 16, "--res", "16x16",
+            "--spp", 4, "--materials", "diffuse", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def bench_straight(toy, tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench") / "bench"
+    roomlight(*bench_make_args(toy, out))
+    return out
+
+
+def manifest_scenes(bench: Path) -> list:
+    return [s["id"] for s in json.loads((bench / "manifest.json").read_text())["scenes"]]
+
+
+@pytest.mark.mitsuba
+@ALL_SIGNALS
+def test_bench_make_interrupted_then_rerun_builds_every_scene_once_and_identically(toy, bench_straight, tmp_path, sig):
+    out = tmp_path / "bench"
+    interrupt_and_rerun(bench_make_args(toy, out), out, lambda: any(out.glob("*/panorama.json")), sig,
+                        seed=int(sig) + 100)
+    assert manifest_scenes(out) == manifest_scenes(bench_straight)
+    assert len(set(manifest_scenes(out))) == 2
+    assert_same_exrs(exr_pixels(out, "*/*/*.exr"), exr_pixels(bench_straight, "*/*/*.exr"))
+
+
+RUN = ["--methods", "direct-envmap", "--preset", "fast", "--iterations", 3, "--fit-spp", 2, "--eval-spp", 4,
+       "--quiet"]
+
+
+def results(out: Path) -> dict:
+    """{case: scores} of every finished case (timings left out)."""
+    found = {}
+    for p in sorted(out.glob("cases/*/*/*/result.json")):  # fit/result.json is the fit's own
+        rec = json.loads(p.read_text())
+        found[p.parent.relative_to(out).as_posix()] = json.dumps(rec.get("metrics", rec.get("scores")), sort_keys=True)
+    return found
+
+
+@pytest.fixture(scope="module")
+def run_straight(bench_straight, tmp_path_factory):
+    out = tmp_path_factory.mktemp("run") / "results"
+    roomlight("bench", "run", bench_straight, "--out", out, *RUN)
+    return results(out)
+
+
+@pytest.mark.mitsuba
+@ALL_SIGNALS
+def test_bench_run_interrupted_then_rerun_runs_every_case_once_and_identically(bench_straight, run_straight, tmp_path,
+                                                                              sig):
+    out = tmp_path / "results"
+    interrupt_and_rerun(["bench", "run", bench_straight, "--out", out, *RUN], out,
+                        lambda: any(out.glob("cases/*/*/*/result.json")), sig, seed=int(sig) + 200)
+    assert len(run_straight) == 2
+    assert results(out) == run_straight

@@ -85,10 +85,12 @@ def ensure_variant(prefer: str | None = None) -> str:
     mi.set_variant(name)
     _active = name
     threads = os.environ.get("ROOMLIGHT_THREADS", "")
-    if threads.isdigit() and int(threads) > 0 and name.startswith("llvm"):
+    # The command line's thread policy (roomlight.cli.threads). Dr.Jit keeps at least two workers:
+    # with one, Mitsuba's parallel scene loading waits on itself.
+    if threads.isdigit() and name.startswith("llvm"):
         import drjit as dr
 
-        dr.set_thread_count(int(threads))  # the command line's thread policy (roomlight.cli.threads)
+        dr.set_thread_count(max(2, int(threads)))
     return name
 
 
