@@ -78,7 +78,10 @@ def workspace(tmp_path_factory):
     rad, dep = _good_arrays()
     norm = Normalization.from_data([(torch_chw(rad), torch_chw(dep[..., None]))])
     PanoVAE(get_preset("tiny"), norm).save_pretrained(model)
-    return {"root": root, "good": good, "model": model}
+    scene = root / "scenes" / "scene.json"
+    scene.parent.mkdir()
+    scene.write_text(json.dumps(SCENE))
+    return {"root": root, "good": good, "model": model, "scene": scene}
 
 
 def torch_chw(a):
@@ -88,7 +91,20 @@ def torch_chw(a):
 
 
 def run(args, tmp_path):
-    return CliRunner().invoke(cli, [str(a) for a in args])
+    result = CliRunner().invoke(cli, [str(a) for a in args])
+    result.command_options = _options(args)
+    return result
+
+
+def _options(args) -> set:
+    """The options of the (sub)command ``args`` runs."""
+    cmd = cli
+    for a in args:
+        sub = cmd.get_command(None, str(a)) if hasattr(cmd, "get_command") else None
+        if sub is None:
+            break
+        cmd = sub
+    return {o for p in cmd.params for o in p.opts}
 
 
 def assert_one_clean_line(result, named: str, out=None):
@@ -100,6 +116,8 @@ def assert_one_clean_line(result, named: str, out=None):
     assert len(errors) == 1 and lines[-1] == errors[0], result.stderr
     assert "Traceback" not in result.output
     assert named in errors[0], f"{named!r} not named in {errors[0]!r}"
+    suggested = set(re.findall(r"(?<![\w-])--[a-z][a-z-]+", errors[0]))
+    assert suggested <= result.command_options, f"suggests {suggested - result.command_options}, not options here"
     if out is not None:
         assert not out.exists() or not any(out.iterdir()), f"half-written output in {out}"
 
@@ -203,6 +221,7 @@ MODEL_COMMANDS = {
     "sample": lambda w, m, out: ["sample", "--model", m, "--n", 1, "--no-render", "--no-emitters", "--out", out],
     "eval-prior": lambda w, m, out: ["eval-prior", "--model", m, "--data", w["root"], "--fit-steps", 0,
                                      "--out", out],
+    "fit": lambda w, m, out: ["fit", w["scene"], "--method", "prior", "--model", m, "--out", out],
 }
 
 

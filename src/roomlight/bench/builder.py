@@ -122,10 +122,15 @@ def load_emitter_panorama(path: Path, height: int) -> tuple[torch.Tensor, torch.
     Returns:
         radiance (H, W, 3) float32 linear, depth (H, W) float32 metres.
     """
+    from roomlight.errors import InputFileError
     from roomlight.geometry.resample import resize_panorama
     from roomlight.io import read_panorama
 
-    pano = read_panorama(path)
+    try:
+        pano = read_panorama(path)
+    except InputFileError as exc:  # the reader's repair flags are not options of `bench make`
+        raise InputFileError(exc.path, exc.problem, "fix the panorama; a benchmark's ground truth is never "
+                             "repaired") from None
     if pano.depth is None:
         raise BenchError(f"{path}: has no depth channel (Z, or A in the authors' layout); the benchmark's "
                          "emitters need radiance + depth panoramas")
