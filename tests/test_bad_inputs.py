@@ -340,3 +340,52 @@ def test_a_real_process_prints_one_line_and_nothing_else(tmp_path, kind):
                        env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and r.stdout == ""
     assert len(r.stderr.splitlines()) == 1 and r.stderr.startswith("error: ") and bad.name in r.stderr, r.stderr
+
+
+def _wrong_value(default):
+    """A JSON value of another type than the field's default."""
+    if isinstance(default, bool):
+        return 3
+    if isinstance(default, (int, float)):
+        return "x"
+    if isinstance(default, str):
+        return 5
+    return True  # a list, a mapping or None
+
+
+def _train_fields():
+    from dataclasses import fields
+
+    from roomlight.train.config import TrainConfig
+
+    cfg = TrainConfig()
+    return [(f.name, _wrong_value(getattr(cfg, f.name))) for f in fields(TrainConfig)]
+
+
+@pytest.mark.parametrize("field, value", _train_fields(), ids=[f for f, _ in _train_fields()])
+def test_every_training_setting_refuses_a_wrong_type_by_name(tmp_path, field, value):
+    data = tmp_path / "data"
+    data.mkdir()
+    r = run(["train", "--data", data, "--out", tmp_path / "run", "--config", "tiny", "--set",
+             f"{field}={json.dumps(value)}"], tmp_path)
+    assert_one_clean_line(r, f"TrainConfig.{field}: expected")
+    assert not (tmp_path / "run").exists()
+
+
+def _bench_fields():
+    from dataclasses import fields
+
+    from roomlight.bench.builder import BenchConfig
+
+    cfg = BenchConfig()
+    return [(f.name, _wrong_value(getattr(cfg, f.name))) for f in fields(BenchConfig)]
+
+
+@pytest.mark.parametrize("field, value", _bench_fields(), ids=[f for f, _ in _bench_fields()])
+def test_every_benchmark_setting_in_a_manifest_refuses_a_wrong_type_by_path(tmp_path, field, value):
+    bench = tmp_path / "bench"
+    bench.mkdir()
+    (bench / "manifest.json").write_text(json.dumps({"version": 1, "config": {field: value}, "scenes": []}))
+    r = run(["bench", "run", bench, "--out", tmp_path / "out", "--methods", "direct-envmap"], tmp_path)
+    assert_one_clean_line(r, "manifest.json", tmp_path / "out")
+    assert f"manifest.config.{field}: expected" in r.stderr
