@@ -81,7 +81,7 @@ def assert_bit_identical(a: dict, b: dict) -> None:
     assert not differing, f"{len(differing)} tensors differ, e.g. {differing[:3]}"
 
 
-STEPS = 30
+STEPS = 60
 TRAIN_ARGS = ["--config", "tiny", "--max-steps", STEPS, "--workers", 0, "--no-cache", "--set", "progress=false",
               "--set", "log_every=1", "--set", "val_fraction=0", "--set", "val_every=0", "--set", "ckpt_every=1000"]
 
@@ -103,14 +103,18 @@ def straight_run(toy, tmp_path_factory):
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_train_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_path, sig):
+    """Three interruptions at random points (most land inside an optimiser step), then the rest."""
     run = tmp_path / "run"
-    code, err = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], lambda: len(train_steps(run)) >= 2,
-                          sig, seed=int(sig), max_delay=0.3)
-    assert code == 128 + sig, err[-2000:]
-    assert "Traceback" not in err
-    stopped = max(train_steps(run))
-    assert stopped < STEPS
-    assert (run / "checkpoints" / f"step-{stopped:08d}").is_dir(), "the last logged step is the one checkpointed"
+    for round_ in range(3):
+        before = max(train_steps(run), default=0)
+        code, err = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS],
+                              lambda: max(train_steps(run), default=0) >= before + 2, sig,
+                              seed=10 * int(sig) + round_, max_delay=0.3)
+        assert code == 128 + sig, err[-2000:]
+        assert "Traceback" not in err
+        stopped = max(train_steps(run))
+        assert stopped < STEPS
+        assert (run / "checkpoints" / f"step-{stopped:08d}").is_dir(), "the last logged step is the one checkpointed"
     r = roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
     assert f"step {stopped} of {STEPS}" in r.stderr + r.stdout
     assert train_steps(run) == list(range(1, STEPS + 1))
