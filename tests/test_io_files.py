@@ -355,7 +355,7 @@ def _grid_mesh():
 
 def test_ply_round_trip(tmp_path):
     v, f, uv, col = _grid_mesh()
-    write_ply(tmp_path / "m.ply", v, f, uv, col)
+    write_ply(tmp_path / "m.ply", v, f, uv=uv, vertex_colors=col)
     m = read_ply(tmp_path / "m.ply")
     np.testing.assert_array_equal(m["vertices"], v)
     np.testing.assert_array_equal(m["faces"], f)
@@ -383,7 +383,7 @@ def test_ply_errors(tmp_path):
 def test_ply_loads_in_mitsuba_with_texcoords(tmp_path, mi_scalar):
     mi = mi_scalar
     v, f, uv, col = _grid_mesh()
-    write_ply(tmp_path / "m.ply", v, f, uv, col)
+    write_ply(tmp_path / "m.ply", v, f, uv=uv, vertex_colors=col)
     mesh = mi.load_dict({"type": "ply", "filename": str(tmp_path / "m.ply")})
     params = mi.traverse(mesh)
     np.testing.assert_array_equal(np.array(params["vertex_positions"]).reshape(-1, 3), v)

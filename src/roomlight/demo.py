@@ -21,10 +21,12 @@ from pathlib import Path
 
 import click
 
+from roomlight.config import StrictConfig
+
 __all__ = ["DemoConfig", "run_demo", "bundled_prior_path"]
 
 @dataclass
-class DemoConfig:
+class DemoConfig(StrictConfig):
     """Sizes of the demo; the defaults finish in a few minutes on a 2-core laptop CPU."""
 
     out: Path = Path("roomlight-demo")

@@ -22,14 +22,16 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import zlib
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from roomlight.bench.errors import BenchError
+from roomlight.config import StrictConfig
 from roomlight.bench.placement import (
     STRATA,
     EmitterProbe,
@@ -56,7 +58,7 @@ GT_SEEDS = {"input": 0, "eval": 1 << 20}
 
 
 @dataclass(frozen=True)
-class BenchConfig:
+class BenchConfig(StrictConfig):
     """Settings of ``roomlight bench make``; the defaults are small enough for a CPU.
 
     The paper: ``emitter_height=512, width=height=1000, spp=4096``.
@@ -93,7 +95,8 @@ class BenchConfig:
         return d
 
     def override(self, **changes) -> BenchConfig:
-        return replace(self, **{k: v for k, v in changes.items() if v is not None})
+        """A copy with the fields that are not None changed; unknown names and wrong types are refused."""
+        return super().override(**{k: v for k, v in changes.items() if v is not None})
 
 
 def _safe_name(stem: str) -> str:
@@ -119,10 +122,15 @@ def load_emitter_panorama(path: Path, height: int) -> tuple[torch.Tensor, torch.
     Returns:
         radiance (H, W, 3) float32 linear, depth (H, W) float32 metres.
     """
+    from roomlight.errors import InputFileError
     from roomlight.geometry.resample import resize_panorama
     from roomlight.io import read_panorama
 
-    pano = read_panorama(path)
+    try:
+        pano = read_panorama(path)
+    except InputFileError as exc:  # the reader's repair flags are not options of `bench make`
+        raise InputFileError(exc.path, exc.problem, "fix the panorama; a benchmark's ground truth is never "
+                             "repaired") from None
     if pano.depth is None:
         raise BenchError(f"{path}: has no depth channel (Z, or A in the authors' layout); the benchmark's "
                          "emitters need radiance + depth panoramas")
@@ -172,8 +180,8 @@ def build_panorama(path: Path, out_dir: Path, config: BenchConfig, progress=None
 
     name = _safe_name(path.stem)
     pano_dir = out_dir / name
+    radiance, depth = load_emitter_panorama(path, config.emitter_height)  # refused before anything is written
     pano_dir.mkdir(parents=True, exist_ok=True)
-    radiance, depth = load_emitter_panorama(path, config.emitter_height)
     rng = np.random.default_rng([config.seed, zlib.crc32(name.encode())])
     shapes = list(config.shapes)
     if len(shapes) < 2:
@@ -272,6 +280,7 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
     if len(set(names)) != len(names):
         raise BenchError(f"--panos {panos}: two panoramas map to the same scene name; rename them")
     out = Path(out_dir)
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     bar = None
     if progress:
@@ -285,7 +294,15 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
             if rec is None:
                 if bar is not None:
                     bar.set_postfix_str(name)
-                rec = build_panorama(f, out, config, bar)
+                try:
+                    rec = build_panorama(f, out, config, bar)
+                except BaseException:
+                    # Built panoramas stay (a re-run reuses them); the one that failed leaves nothing.
+                    if (out / name).is_dir() and _done_record(out / name, config) is None:
+                        shutil.rmtree(out / name, ignore_errors=True)
+                    if created and not any(out.iterdir()):
+                        out.rmdir()
+                    raise
             elif bar is not None:
                 bar.update(len(config.materials))
             records.append(rec)
@@ -299,16 +316,41 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
     return manifest
 
 
+_MANIFEST_KEYS = ("version", "config", "panoramas", "scenes")
+_SCENE_KEYS = {"id": str, "panorama": str, "material": str, "scene": str, "exposure": (int, float),
+               "saturated_fraction": dict, "mask_pixels": dict}
+
+
 def read_manifest(bench_dir) -> dict:
-    """The manifest of a benchmark directory (errors name the file)."""
+    """The manifest of a benchmark directory (errors name the file and the field's path)."""
+    from roomlight.config import ConfigError, check_keys
+
     p = Path(bench_dir)
     f = p / MANIFEST if p.is_dir() else p
     if not f.is_file():
         raise BenchError(f"{f}: no benchmark manifest (build one with `roomlight bench make`)")
     try:
         m = json.loads(f.read_text())
-    except ValueError as exc:
+    except (ValueError, UnicodeDecodeError) as exc:
         raise BenchError(f"{f}: not valid JSON: {exc}") from None
     if not isinstance(m, dict) or not isinstance(m.get("scenes"), list):
         raise BenchError(f"{f}: not a benchmark manifest (no 'scenes' list)")
+    try:
+        check_keys(m, _MANIFEST_KEYS, "manifest")
+        if m.get("version", MANIFEST_VERSION) != MANIFEST_VERSION:
+            raise ConfigError(f"manifest.version: this roomlight reads version {MANIFEST_VERSION}, "
+                              f"got {m.get('version')!r}")
+        if "config" in m:
+            BenchConfig.from_dict(m["config"], where="manifest.config")
+        for i, s in enumerate(m["scenes"]):
+            where = f"manifest.scenes[{i}]"
+            check_keys(s, _SCENE_KEYS, where)
+            for key, kind in _SCENE_KEYS.items():
+                if key in ("id", "panorama", "material", "scene") and key not in s:
+                    raise ConfigError(f"{where}.{key}: missing (required)")
+                if key in s and (not isinstance(s[key], kind) or isinstance(s[key], bool)):
+                    raise ConfigError(f"{where}.{key}: expected {getattr(kind, '__name__', 'a number')}, "
+                                      f"got {s[key]!r}")
+    except ConfigError as exc:
+        raise BenchError(f"{f}: {exc}") from None
     return m

@@ -295,6 +295,7 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
     methods = tuple(methods) if methods else known_methods()
     bench = Path(bench_dir).resolve()
     out = Path(out_dir)
+    list_cases(bench, methods, shard)  # a broken benchmark is refused before anything is written
     out.mkdir(parents=True, exist_ok=True)
     cfg_dict = fit_config.to_dict() if hasattr(fit_config, "to_dict") else (
         dict(vars(fit_config)) if fit_config is not None else None)

@@ -95,13 +95,67 @@ def default_of(cls, name: str) -> str:
     return f"[default: {value}]"
 
 
+class FiniteFloat(click.ParamType):
+    """A finite number: NaN and infinities are refused (``float`` would accept them)."""
+
+    name = "VALUE"
+
+    def convert(self, value, param, ctx):
+        import math
+
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"expected a finite number, got {value!r}", param, ctx)
+        if not math.isfinite(v):
+            self.fail(f"expected a finite number (-inf < VALUE < inf), got {value!r}", param, ctx)
+        return v
+
+
 VEC3 = Vec3()
 RESOLUTION = Resolution()
+FINITE = FiniteFloat()
+#: A panorama height (width 2x): at least 1 pixel, at most 8192.
+HEIGHT = click.IntRange(1, 8192)
+
+
+def repair_options(command):
+    """``--clamp-negative`` and ``--fill-nonfinite VALUE``: the repairs a command reading panoramas offers.
+
+    Without them a panorama with negative or NaN/inf radiance is refused; with them it is repaired
+    and the number of changed pixels reported.
+    """
+    command = click.option("--fill-nonfinite", type=FINITE, default=None, metavar="VALUE",
+                           help="Replace NaN/inf radiance by VALUE (reports how many changed).")(command)
+    return click.option("--clamp-negative", is_flag=True,
+                        help="Set negative radiance values to 0 (reports how many changed).")(command)
+
+
+def sets_option(what: str):
+    """The shared repeatable ``--set FIELD=VALUE`` option (read with :func:`parse_sets`)."""
+    return click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
+                        help=f"Override any {what} field (repeatable), e.g. --set lr=0.05.")
+
+
+class InputError(click.ClickException):
+    """An input the command cannot use: ``error: MESSAGE`` on one line of stderr, exit code 2
+    (the same as a :class:`RoomlightError` raised deeper down)."""
+
+    exit_code = 2
+
+    def show(self, file=None) -> None:
+        click.echo(f"error: {self.format_message()}", err=True)
 
 
 def fail(message: str) -> None:
     """Stop the command with a one-line error (exit code 2), no stack trace."""
-    raise click.ClickException(message)
+    raise InputError(message)
+
+
+def echo_fixes(fixes) -> None:
+    """Report repairs applied to an input (``--clamp-negative``, ``--fill-nonfinite``), one note each."""
+    for fix in fixes:
+        click.echo(f"note: {fix}", err=True)
 
 
 class RoomlightGroup(click.Group):

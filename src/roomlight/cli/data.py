@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from roomlight.cli.common import RESOLUTION, RoomlightGroup
+from roomlight.cli.common import HEIGHT, RESOLUTION, RoomlightGroup, fail, repair_options
 from roomlight.model.config import PRESETS
 
 
@@ -37,7 +37,8 @@ def command():
 @click.option("--no-calibrate", is_flag=True, help="Do not exposure-calibrate radiance (it normally is).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), default=None,
               help="Write the statistics as JSON here (default: DATA_DIR/stats-HxW.json).")
-def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path):
+@repair_options
+def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path, clamp_negative, fill_nonfinite):
     """Normalisation statistics (mean/std of log1p RGB and log depth) and a data summary.
 
     The statistics are what `roomlight train` computes at its start and stores in the model;
@@ -48,8 +49,13 @@ def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path):
     h, w = _resolution(res, preset)
     splits = split_files(data_dir)
     files = [f for s in splits.values() for f in s] if split == "all" else splits[split]
-    ds = PanoramaDataset(files, (h, w), root=data_dir, calibrate=not no_calibrate, depth_units=depth_units)
+    ds = PanoramaDataset(files, (h, w), root=data_dir, calibrate=not no_calibrate, depth_units=depth_units,
+                         clamp_negative=clamp_negative, fill_nonfinite=fill_nonfinite)
     st = dataset_statistics(ds)
+    for item in st["skipped"]:
+        click.echo(f"skipped {item['name']}: {item['reason']}", err=True)
+    if st["count"] == 0:
+        fail(f"no usable panorama in {data_dir}")
     st.update({"split": split, "calibrated": not no_calibrate, "depth_units": depth_units, "data": str(data_dir)})
     out = Path(out_path) if out_path else Path(data_dir) / f"stats-{h}x{w}.json"
     out.write_text(json.dumps(st, indent=2) + "\n")
@@ -59,8 +65,6 @@ def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path):
         click.echo("channel      mean      std")
         for c, m, s in zip(n["channels"], n["mean"], n["std"]):
             click.echo(f"{c:<10} {m:8.4f} {s:8.4f}")
-    for item in st["skipped"]:
-        click.echo(f"skipped {item['name']}: {item['reason']}", err=True)
     click.echo(f"-> {out}")
 
 
@@ -86,7 +90,7 @@ def pack(data_dir, res, preset, dtype, depth_units, workers):
 @command.command("toy")
 @click.option("--n", "count", type=int, default=64, show_default=True)
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False))
-@click.option("--height", type=int, default=32, show_default=True, help="Panorama height (width 2x).")
+@click.option("--height", type=HEIGHT, default=32, show_default=True, help="Panorama height (width 2x).")
 @click.option("--seed", type=int, default=0, show_default=True)
 def toy(count, out_dir, height, seed):
     """Write analytic toy box rooms (exact depth, a panel and/or window light) for smoke runs.

@@ -6,13 +6,13 @@ from pathlib import Path
 
 import click
 
-from roomlight.cli.common import RESOLUTION
+from roomlight.cli.common import HEIGHT, RESOLUTION
 from roomlight.demo import DemoConfig
 
 
 @click.command("demo")
 @click.option("--out", "out_dir", default="roomlight-demo", show_default=True, type=click.Path(file_okay=False))
-@click.option("--height", type=int, default=DemoConfig.height, show_default=True,
+@click.option("--height", type=HEIGHT, default=DemoConfig.height, show_default=True,
               help="Panorama height (width is twice this).")
 @click.option("--res", type=RESOLUTION, default=f"{DemoConfig.res[0]}x{DemoConfig.res[1]}", show_default=True,
               help="Benchmark image size HxW (one number: square).")

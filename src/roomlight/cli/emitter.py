@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from roomlight.cli.common import fail
+from roomlight.cli.common import HEIGHT, echo_fixes, fail, repair_options
 
 
 def load_panorama_tensors(pano: str, depth: str | None, resolution: int | None, clamp_negative: bool,
@@ -26,8 +26,7 @@ def load_panorama_tensors(pano: str, depth: str | None, resolution: int | None, 
     with warnings.catch_warnings():  # the fixes are reported below, once, as notes
         warnings.simplefilter("ignore")
         p = read_panorama(pano, depth_path=depth, clamp_negative=clamp_negative, fill_nonfinite=fill_nonfinite)
-    for fix in p.fixes:
-        click.echo(f"note: {fix}", err=True)
+    echo_fixes(p.fixes)
     rad = torch.from_numpy(p.radiance).float()
     dep = torch.from_numpy(p.depth).float() if p.depth is not None else None
     if resolution and resolution != rad.shape[0]:
@@ -44,11 +43,9 @@ def load_panorama_tensors(pano: str, depth: str | None, resolution: int | None, 
 @click.option("--as", "kind", default="mesh", show_default=True, metavar="mesh|envmap|sphere:R",
               help="Representation: the 2.5D area light, an env map at infinity, or a sphere of radius R (metres).")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
-@click.option("--height", "resolution", type=int, default=None,
+@click.option("--height", "resolution", type=HEIGHT, default=None,
               help="Resample the panorama to HEIGHT x 2*HEIGHT first (e.g. 128 for the prior's resolution).")
-@click.option("--clamp-negative", is_flag=True, help="Set negative radiance values to 0 (reports how many changed).")
-@click.option("--fill-nonfinite", type=float, default=None, metavar="VALUE",
-              help="Replace NaN/inf pixels by VALUE (reports how many changed).")
+@repair_options
 def command(pano, depth_path, kind, out_dir, resolution, clamp_negative, fill_nonfinite):
     """Build an emitter from panorama PANO and write it to --out.
 

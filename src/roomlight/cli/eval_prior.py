@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+from roomlight.cli.common import fail, parse_sets, repair_options, sets_option
+
 
 @click.command("eval-prior")
 @click.option("--model", "model_path", required=True, type=click.Path(exists=True),
@@ -25,7 +27,10 @@ import click
 @click.option("--batch-size", type=int, default=8, show_default=True)
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Where eval_prior.md / .json go (default: the --model folder).")
-def command(model_path, data_dir, split, fit_steps, depth_only, radiance_only, limit, batch_size, out_dir):
+@repair_options
+@sets_option("LatentFitConfig of the latent-fit rows")
+def command(model_path, data_dir, split, fit_steps, depth_only, radiance_only, limit, batch_size, out_dir,
+            clamp_negative, fill_nonfinite, sets):
     """Reconstruction quality of the prior (paper Tab. 1): encoder pass and latent fit.
 
     Metrics: PSNR and SSIM on tone-mapped LDR (LPIPS too when its weights are available
@@ -49,10 +54,15 @@ def command(model_path, data_dir, split, fit_steps, depth_only, radiance_only, l
     files = files[:limit] if limit else files
     units = model.metadata.get("depth_units", "metres")
     ds = PanoramaDataset(files, model.config.resolution, root=data_dir, calibrate=True, depth_units=units,
+                         clamp_negative=clamp_negative, fill_nonfinite=fill_nonfinite,
                          require_depth=not radiance_only)
-    fit = LatentFitConfig(steps=fit_steps) if fit_steps > 0 else None
+    fit = LatentFitConfig(steps=fit_steps).override(**parse_sets(sets)) if fit_steps > 0 else None
     report = evaluate_prior(model, ds, fit, batch_size=batch_size, depth_only_fit=depth_only,
                             note=lambda m: click.echo(m, err=True), radiance_only=radiance_only)
+    if report["count"] == 0:
+        no_depth = report["skipped"] and all("no depth" in s["reason"] for s in report["skipped"])
+        fail(f"no usable panorama in {data_dir}"
+             + ("; its files have no depth: evaluate them with --radiance-only" if no_depth else ""))
     report.update({"model": str(resolve_run_model(model_path)), "data": str(data_dir), "split": split})
     out = Path(out_dir) if out_dir else Path(model_path)
     if out.is_file():

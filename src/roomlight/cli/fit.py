@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from roomlight.cli.common import default_of, parse_sets
+from roomlight.cli.common import default_of, fail, parse_sets
 from roomlight.inverse.config import FIT_PRESETS, FitConfig
 from roomlight.inverse.methods import METHODS, needs_prior
 
@@ -19,7 +19,7 @@ _FAST = FIT_PRESETS["fast"]
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior for the prior methods: a model folder, a training run (uses its best/) "
-                   "or the authors' run folder.")
+                   "or the authors' run folder [default: the prior bundled with roomlight].")
 @click.option("--preset", type=click.Choice(list(FIT_PRESETS)), default="paper", show_default=True,
               help=f"paper: the paper's settings ({FitConfig.iterations} it, {FitConfig.spp} spp); fast: a CPU-friendly "
                    f"setting ({_FAST.iterations} it, {_FAST.spp} spp).")
@@ -56,7 +56,13 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     prior = None
     if needs_prior(method):
         if model is None:
-            raise click.UsageError(f"--method {method} needs --model (a trained prior)")
+            from roomlight.demo import bundled_prior_path
+
+            model = bundled_prior_path()
+            if model is None:
+                fail(f"--method {method} needs --model (a trained prior); this installation has no bundled prior")
+            click.echo(f"note: --method {method} without --model: using the bundled prior ({model}), a small "
+                       "CPU-trained one; pass --model RUN for your own", err=True)
         from roomlight.render.variant import torch_device
         from roomlight.model.runs import load_run_model
 

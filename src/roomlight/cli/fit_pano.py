@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from roomlight.cli.common import fail
+from roomlight.cli.common import echo_fixes, fail, parse_sets, repair_options, sets_option
 
 
 @click.command("fit-pano")
@@ -27,7 +27,10 @@ from roomlight.cli.common import fail
               help="Output folder (default: PANO's name + '-fit' next to it).")
 @click.option("--emitter/--no-emitter", default=True, show_default=True,
               help="Also write the fitted panorama as a 2.5D area light bundle (out/emitter).")
-def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out_dir, emitter):
+@repair_options
+@sets_option("LatentFitConfig (docs/training.md)")
+def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out_dir, emitter, clamp_negative,
+            fill_nonfinite, sets):
     """Fit the prior's latent to panorama PANO (decoder frozen; Adam, lr 0.1 -> 0.01).
 
     \b
@@ -52,12 +55,16 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out
     device = next(model.parameters()).device
     units = model.metadata.get("depth_units", "metres")
     rad, dep, info = load_training_pair(pano, model.config.resolution, calibrate=True, depth_units=units,
-                                        depth_path=depth_path, require_depth=False)
+                                        depth_path=depth_path, require_depth=False, clamp_negative=clamp_negative,
+                                        fill_nonfinite=fill_nonfinite)
+    echo_fixes(info["fixes"])
     if target is None:
         target = "both" if dep is not None else "radiance"
     if target != "radiance" and dep is None:
         fail(f"{pano}: --target {target} needs depth; pass --depth FILE or use --target radiance")
-    cfg = LatentFitConfig(steps=steps, lr=lr, lr_final=lr_final, target=target, init_from_encoder=init == "encoder")
+    cfg = LatentFitConfig(steps=steps, lr=lr, lr_final=lr_final, target=target,
+                          init_from_encoder=init == "encoder").override(**parse_sets(sets))
+    steps = cfg.steps
     rad_b = rad[None].to(device)
     dep_b = dep[None].to(device) if dep is not None else None
     bar = progress_bar(total=steps, desc="fit-pano", unit="step")

@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
-import click
+from roomlight.cli.threads import apply_thread_policy, default_threads, prepare_environment
 
-from roomlight import __version__
-from roomlight.cli.common import RoomlightGroup
+prepare_environment()  # passive OpenMP waiting: before anything imports torch
+
+import click  # noqa: E402
+
+from roomlight import __version__  # noqa: E402
+from roomlight.cli.common import RoomlightGroup  # noqa: E402
 
 
 @click.group(cls=RoomlightGroup, context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.version_option(__version__, prog_name="roomlight")
-def cli():
+@click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Threads for torch and Mitsuba [default: $ROOMLIGHT_THREADS, else the CPUs available].")
+def cli(threads):
     """roomlight: spatially-varying indoor illumination as 2.5D area lights.
 
     Panoramas of HDR radiance + radial depth become emissive meshes that light a scene
@@ -30,6 +36,7 @@ def cli():
       roomlight view PATH --out page.html  an interactive viewer of a 2.5D light
       roomlight export PATH --out light.glb   the light for Blender / three.js / USD
     """
+    apply_thread_policy(threads)
 
 
 def _register():
@@ -45,6 +52,7 @@ _register()
 
 
 def main():  # console-script entry point
+    default_threads()
     cli(prog_name="roomlight")
 
 

@@ -7,8 +7,10 @@ from pathlib import Path
 
 import click
 
+from roomlight.cli.common import echo_fixes, parse_sets, repair_options, sets_option
 
-def _encode_file(model, path, fit_steps: int):
+
+def _encode_file(model, path, fit_steps: int, sets: dict, repairs: dict):
     """Latent (D,) of a panorama file: the encoder's mean, refined by a latent fit if fit_steps > 0."""
     import torch
 
@@ -16,12 +18,14 @@ def _encode_file(model, path, fit_steps: int):
     from roomlight.fit import LatentFitConfig, fit_latent
 
     device = next(model.parameters()).device
-    rad, dep, _ = load_training_pair(path, model.config.resolution, calibrate=True,
-                                     depth_units=model.metadata.get("depth_units", "metres"))
+    rad, dep, info = load_training_pair(path, model.config.resolution, calibrate=True,
+                                        depth_units=model.metadata.get("depth_units", "metres"), **repairs)
+    echo_fixes(info["fixes"])
     with torch.no_grad():
         z = model.encode(rad[None].to(device), dep[None].to(device)).mean
     if fit_steps > 0:
-        z = fit_latent(model, rad[None].to(device), dep[None].to(device), LatentFitConfig(steps=fit_steps), z0=z).z
+        z = fit_latent(model, rad[None].to(device), dep[None].to(device), LatentFitConfig(steps=fit_steps).override(**sets),
+                       z0=z).z
     return z[0].cpu()
 
 
@@ -45,8 +49,10 @@ def _encode_file(model, path, fit_steps: int):
 @click.option("--spp", type=int, default=32, show_default=True)
 @click.option("--emitters/--no-emitters", default=True, show_default=True,
               help="Write each sample as a 2.5D area light bundle (PLY + EXR + scene.xml).")
+@sets_option("LatentFitConfig of --fit-steps")
+@repair_options
 def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fit_steps, render, render_res, spp,
-            emitters):
+            emitters, sets, clamp_negative, fill_nonfinite):
     """Decode z ~ N(0, I) into panoramas: EXRs, 2.5D area lights and a figure (paper Fig. 3).
 
     \b
@@ -66,13 +72,18 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
     from roomlight.io import write_exr, write_panorama
     from roomlight.model.runs import load_run_model
 
+    sets = parse_sets(sets)
+    repairs = {"clamp_negative": clamp_negative, "fill_nonfinite": fill_nonfinite}
+    from roomlight.fit import LatentFitConfig
+
+    LatentFitConfig().override(**sets)  # refuse a bad --set before any work
     model = load_run_model(model_path)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     units = model.metadata.get("depth_units", "metres")
     if interpolate:
         a, b = interpolate
-        z = interpolate_latents(_encode_file(model, a, fit_steps), _encode_file(model, b, fit_steps), count, mode)
+        z = interpolate_latents(_encode_file(model, a, fit_steps, sets, repairs), _encode_file(model, b, fit_steps, sets, repairs), count, mode)
         rad, dep = decode_latents(model, z)
         for i in range(count):
             write_panorama(out / f"interp_{i:03d}.exr", (rad[i], dep[i, 0]), half=False,

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from roomlight.cli.common import parse_sets
+from roomlight.cli.common import parse_sets, repair_options
 from roomlight.train.config import TRAIN_PRESETS
 
 
@@ -33,12 +33,13 @@ from roomlight.train.config import TRAIN_PRESETS
 @click.option("--until-step", type=click.IntRange(min=1), default=None,
               help="Stop at this step (checkpointed); the same command continues later.")
 @click.option("--print-config", is_flag=True, help="Print the resolved configuration as JSON and exit.")
+@repair_options
 def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, num_workers, no_cache, device,
-            sets, time_budget, until_step, print_config):
+            sets, time_budget, until_step, print_config, clamp_negative, fill_nonfinite):
     """Train the illumination prior on panoramas in --data, writing the run to --out.
 
-    Interrupting (Ctrl-C) saves a checkpoint; running the same command again continues exactly
-    where it stopped. Resuming with settings that change the optimisation is refused and the
+    Interrupting (Ctrl-C or SIGTERM) finishes the current step and saves a checkpoint; running the
+    same command again continues exactly where it stopped, as if it had not been interrupted. Resuming with settings that change the optimisation is refused and the
     differing fields are named. Several GPUs:
 
     \b
@@ -50,6 +51,10 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
                                        num_workers=num_workers).items() if v is not None}
     if no_cache:
         overrides["cache"] = False
+    if clamp_negative:
+        overrides["clamp_negative"] = True
+    if fill_nonfinite is not None:
+        overrides["fill_nonfinite"] = fill_nonfinite
     overrides.update(parse_sets(sets))
     cfg = get_train_preset(preset).replace(**overrides)
     if print_config:
@@ -58,8 +63,8 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
     trainer = Trainer(cfg, data_dir, run_dir, device=device)
     try:
         summary = trainer.fit(until=until_step, time_budget_s=None if time_budget is None else 60.0 * time_budget)
-    except KeyboardInterrupt:
-        raise SystemExit(130) from None
+    except KeyboardInterrupt as exc:  # a checkpoint of the last complete step was written
+        raise SystemExit(128 + getattr(exc, "signum", 2)) from None
     finally:
         trainer.close()
     if trainer.dist.is_main:

@@ -115,7 +115,8 @@ class PackedCache:
     @classmethod
     def open_or_build(cls, root: str | Path, files: list[Path], resolution, *, path: str | Path | None = None,
                       dtype: str = "float16", calibrate: bool = True, depth_units: str = "metres",
-                      workers: int = 0, progress: bool = True, log=print) -> "PackedCache":
+                      workers: int = 0, progress: bool = True, log=print, clamp_negative: bool = False,
+                      fill_nonfinite: float | None = None) -> "PackedCache":
         """Open the pack for ``files`` (paths under ``root``), building it first if needed.
 
         Args:
@@ -128,6 +129,8 @@ class PackedCache:
                 pixels) or ``float32``.
             workers: processes decoding EXRs in parallel while building.
             log: function receiving one-line messages (e.g. skipped files).
+            clamp_negative, fill_nonfinite: repairs, as for :func:`roomlight.data.load_training_pair`
+                (files needing one that is not enabled are skipped, with the reason).
         """
         root = Path(root)
         if dtype not in ("float16", "float32"):
@@ -136,6 +139,9 @@ class PackedCache:
         path = Path(path) if path is not None else default_cache_path(root, resolution, dtype, calibrate, depth_units)
         settings = {"resolution": list(resolution), "dtype": dtype, "calibrate": calibrate,
                     "depth_units": depth_units, "encoding": "log1p_rgb_log_depth"}
+        repairs = {"clamp_negative": clamp_negative, "fill_nonfinite": fill_nonfinite}
+        if clamp_negative or fill_nonfinite is not None:  # recorded only when used: older packs stay current
+            settings["repairs"] = repairs
         if not cls.is_current(path, root, files, settings):
             cls._build(path, root, files, resolution, settings, workers, progress, log)
         return cls(path)
@@ -154,8 +160,10 @@ class PackedCache:
         tmp = path.with_name(path.stem + f".tmp-{os.getpid()}.npy")
         arr = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.dtype(settings["dtype"]),
                                         shape=(max(n, 1), 4, h, w))
+        repairs = settings.get("repairs", {})
         ds = PanoramaDataset(files, resolution, root=root, calibrate=settings["calibrate"],
-                             depth_units=settings["depth_units"])
+                             depth_units=settings["depth_units"], clamp_negative=repairs.get("clamp_negative", False),
+                             fill_nonfinite=repairs.get("fill_nonfinite"))
         # batch_size=None: items one by one, decoded in `workers` processes (EXR decoding is the cost).
         loader = DataLoader(ds, batch_size=None, shuffle=False, num_workers=workers,
                             collate_fn=_identity)
@@ -168,6 +176,8 @@ class PackedCache:
                 entry["error"] = item["error"]
                 log(f"skipping {item['name']}: {item['error']}")
             else:
+                for fix in item.get("fixes", []):
+                    log(f"note: {fix}")
                 arr[row] = encode_pair(item["radiance"], item["depth"]).numpy().astype(arr.dtype)
                 entry["row"] = row
                 row += 1

@@ -31,7 +31,8 @@ DEPTH_UNITS = ("metres", "scale-free")
 
 def load_training_pair(path: str | Path, resolution: tuple[int, int], calibrate: bool = True,
                        depth_units: str = "metres", depth_path: str | Path | None = None,
-                       require_depth: bool = True) -> tuple[torch.Tensor, torch.Tensor | None, dict]:
+                       require_depth: bool = True, *, clamp_negative: bool = False,
+                       fill_nonfinite: float | None = None) -> tuple[torch.Tensor, torch.Tensor | None, dict]:
     """Read one panorama and bring it to the training format.
 
     Args:
@@ -43,10 +44,12 @@ def load_training_pair(path: str | Path, resolution: tuple[int, int], calibrate:
         depth_units: ``metres`` (keep) or ``scale-free`` (divide by the geometric mean).
         depth_path: separate depth file (``.exr``, ``.npy``, 16-bit PNG in mm).
         require_depth: raise when there is no depth; otherwise depth comes back as None.
+        clamp_negative, fill_nonfinite: repairs of the radiance, as for
+            :func:`roomlight.io.read_panorama`; without them such a file is refused.
     Returns:
         radiance (3, H, W) float32 linear >= 0; depth (1, H, W) float32 > 0 (or None); info dict
         with ``exposure_factor`` (original = returned * factor), ``depth_scale`` (original depth
-        = returned * scale) and the source ``resolution``.
+        = returned * scale), the source ``resolution`` and ``fixes`` (one line per repair).
     Raises:
         InputFileError: the file cannot be read or has no depth (the message names the file).
     """
@@ -55,7 +58,12 @@ def load_training_pair(path: str | Path, resolution: tuple[int, int], calibrate:
 
     if depth_units not in DEPTH_UNITS:
         raise RoomlightError(f"depth_units must be one of {DEPTH_UNITS}, got {depth_units!r}")
-    pano = read_panorama(path, depth_path=depth_path, clamp_negative=True)
+    import warnings
+
+    with warnings.catch_warnings():  # repairs are returned in info["fixes"] for the caller to report
+        warnings.simplefilter("ignore")
+        pano = read_panorama(path, depth_path=depth_path, clamp_negative=clamp_negative,
+                             fill_nonfinite=fill_nonfinite)
     if pano.depth is None and require_depth:
         raise InputFileError(path, "has no depth channel (expected Z, or A in the authors' 4-channel layout)",
                              "training needs radiance + radial depth; add depth or remove the file")
@@ -81,7 +89,7 @@ def load_training_pair(path: str | Path, resolution: tuple[int, int], calibrate:
             dep_t = resize_panorama(dep_t, h)
         dep_t = dep_t[0].float().contiguous()
     info = {"exposure_factor": float(factor), "depth_scale": float(scale),
-            "source_resolution": [pano.height, pano.width]}
+            "source_resolution": [pano.height, pano.width], "fixes": list(pano.fixes)}
     return rad_t[0].float().contiguous(), dep_t, info
 
 
@@ -107,7 +115,8 @@ class PanoramaDataset(Dataset):
         files: panorama EXR paths (e.g. one split of :func:`roomlight.data.splits.split_files`).
         resolution: (H, W) training resolution.
         root: folder that names are relative to (default: each file's parent).
-        calibrate, depth_units: see :func:`load_training_pair`.
+        calibrate, depth_units, clamp_negative, fill_nonfinite: see :func:`load_training_pair`
+            (a file needing a repair that is not enabled becomes an item with ``error``).
         cache: an opened :class:`~roomlight.data.cache.PackedCache` holding these files; items
             are then read from it instead of decoding EXRs.
         require_depth: False accepts radiance-only files (real captures, ``.hdr``); their
@@ -119,7 +128,8 @@ class PanoramaDataset(Dataset):
     """
 
     def __init__(self, files, resolution: tuple[int, int], root: str | Path | None = None,
-                 calibrate: bool = True, depth_units: str = "metres", cache=None, require_depth: bool = True):
+                 calibrate: bool = True, depth_units: str = "metres", cache=None, *,
+                 clamp_negative: bool = False, fill_nonfinite: float | None = None, require_depth: bool = True):
         self.files = [Path(f) for f in files]
         self.require_depth = require_depth
         self.resolution = (int(resolution[0]), int(resolution[1]))
@@ -127,6 +137,7 @@ class PanoramaDataset(Dataset):
         self.calibrate = calibrate
         self.depth_units = depth_units
         self.cache = cache
+        self.repairs = {"clamp_negative": clamp_negative, "fill_nonfinite": fill_nonfinite}
         if cache is not None and tuple(cache.resolution) != self.resolution:
             raise RoomlightError(f"PanoramaDataset: cache resolution {cache.resolution} differs from "
                                  f"the requested {self.resolution}")
@@ -146,17 +157,21 @@ class PanoramaDataset(Dataset):
 
     def __getitem__(self, index: int) -> dict:
         name = self.name(index)
+        info: dict = {}
         try:
             if self.cache is not None:
                 radiance, depth = decode_pair(self.cache.get(name))
             else:
-                radiance, depth, _ = load_training_pair(self.files[index], self.resolution,
-                                                        self.calibrate, self.depth_units,
+                radiance, depth, info = load_training_pair(self.files[index], self.resolution,
+                                                        self.calibrate, self.depth_units, **self.repairs,
                                                         require_depth=self.require_depth)
         except (RoomlightError, OSError, ValueError) as exc:
             # Reported by the collate function; one bad file must not end the epoch.
             return {"name": name, "index": index, "error": str(exc)}
-        return {"radiance": radiance, "depth": depth, "name": name, "index": index}
+        item = {"radiance": radiance, "depth": depth, "name": name, "index": index}
+        if info.get("fixes"):
+            item["fixes"] = info["fixes"]  # repairs the caller asked for, to be reported
+        return item
 
 
 def collate_panoramas(items: list[dict]) -> dict:
@@ -181,4 +196,5 @@ def collate_panoramas(items: list[dict]) -> dict:
         "names": [it["name"] for it in good],
         "indices": torch.tensor([it["index"] for it in good], dtype=torch.int64),
         "skipped": skipped,
+        "fixes": [(it["name"], fix) for it in good for fix in it.get("fixes", [])],
     }

@@ -78,5 +78,5 @@ def split_files(root: str | Path, val_fraction: float = 0.05) -> dict[str, list[
         out = {"train": [p for p in files if p not in val_set], "val": val, "test": []}
     if not any(out.values()):
         raise InputFileError(root, "contains no panorama (.exr) files",
-                             "point --data at a folder of R,G,B,Z (or R,G,B,A) EXR panoramas")
+                             "expected a folder of R,G,B,Z (or R,G,B,A) EXR panoramas")
     return out

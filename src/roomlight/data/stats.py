@@ -17,7 +17,17 @@ from roomlight.color import luminance_torch
 from roomlight.errors import RoomlightError
 from roomlight.model.normalization import Normalization
 
-__all__ = ["dataset_statistics", "normalization_from_dataset"]
+__all__ = ["dataset_statistics", "normalization_from_dataset", "NoUsablePanorama"]
+
+
+class NoUsablePanorama(RoomlightError):
+    """Every file of a dataset was skipped; ``skipped`` lists (name, reason) for each."""
+
+    def __init__(self, where, skipped: list):
+        self.skipped = list(skipped)
+        super().__init__(f"no usable panorama in {where}" + (f" ({len(skipped)} skipped: "
+                         f"{'; '.join(f'{n}: {why}' for n, why in skipped[:3])}"
+                         f"{'; ...' if len(skipped) > 3 else ''})" if skipped else ""))
 
 
 def _good_items(dataset, skipped: list, progress: bool, desc: str):
@@ -39,7 +49,18 @@ def normalization_from_dataset(dataset, progress: bool = False) -> tuple[Normali
     """
     skipped: list = []
     pairs = ((it["radiance"], it["depth"]) for it in _good_items(dataset, skipped, progress, "statistics"))
-    return Normalization.from_data(pairs), skipped
+    try:
+        return Normalization.from_data(pairs), skipped
+    except RoomlightError:
+        if skipped or len(dataset) == 0:
+            raise NoUsablePanorama(_folder(dataset), skipped) from None
+        raise
+
+
+def _folder(dataset):
+    root = getattr(dataset, "root", None)
+    files = getattr(dataset, "files", [])
+    return root if root is not None else (files[0].parent if files else "the dataset")
 
 
 def dataset_statistics(dataset, progress: bool = True, sample_pixels: int = 4096) -> dict:

@@ -141,10 +141,6 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         per_image += records
         done += len(batch["names"]) + len(batch["skipped"])
     bar.close()
-    if not per_image:
-        hint = ("; they have no depth: evaluate them with --radiance-only"
-                if skipped and all("no depth" in s["reason"] for s in skipped) else "")
-        raise RoomlightError(f"no usable panorama to evaluate ({len(skipped)} skipped{hint})")
     means = {row: {k: _mean(v) for k, v in vals.items()} for row, vals in values.items()}
     return {"count": len(per_image), "rows": means, "per_image": per_image, "skipped": skipped,
             "lpips": lpips_reason, "fit": fit_config.to_dict() if fit_config is not None else None}

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -34,6 +35,29 @@ HALF_MAX = 65504.0
 DEPTH_CHANNEL = "Z"
 
 
+@contextmanager
+def _captured_output(sink: list):
+    """Collect what C code writes to file descriptors 1 and 2 into ``sink`` (OpenEXR reports a
+    damaged file there itself, in lines of its own, before the binding raises)."""
+    import sys
+    import tempfile
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        saved = [os.dup(fd) for fd in (1, 2)]
+        for fd in (1, 2):
+            os.dup2(tmp.fileno(), fd)
+        try:
+            yield
+        finally:
+            for fd, old in zip((1, 2), saved):
+                os.dup2(old, fd)
+                os.close(old)
+            tmp.seek(0)
+            sink.extend(tmp.read().decode(errors="replace").splitlines())
+
+
 def _open(path: str | os.PathLike):
     import OpenEXR
 
@@ -42,16 +66,25 @@ def _open(path: str | os.PathLike):
         raise InputFileError(
             p, "is not an OpenEXR file (bad magic number)", "check that the file is really an .exr"
         )
+    said: list[str] = []  # the library's own report of a damaged file: folded into one error line
     try:
-        f = OpenEXR.File(str(p), separate_channels=True)
+        with _captured_output(said):
+            f = OpenEXR.File(str(p), separate_channels=True)
     except Exception as e:  # the binding raises RuntimeError/ValueError with C-level text
         raise InputFileError(p, f"OpenEXR could not read the file: {e}") from e
     if len(f.parts) == 0:
+        detail = next((line.strip() for line in said if line.strip()), "")
+        if detail:
+            detail = f"; OpenEXR: {detail[:160]}"
         raise InputFileError(
             p,
-            "corrupt or truncated OpenEXR file (no image part could be decoded)",
+            f"corrupt or truncated OpenEXR file (no image part could be decoded{detail})",
             "re-export or re-download the file",
         )
+    if said:  # the file opened: pass the library's warnings on
+        import sys
+
+        print("\n".join(said), file=sys.stderr)
     if len(f.parts) > 1:
         raise InputFileError(
             p,
@@ -130,8 +163,8 @@ def read_exr(path: str | os.PathLike) -> dict[str, np.ndarray]:
 def write_exr(
     path: str | os.PathLike,
     channels: Mapping[str, np.ndarray],
-    half: bool | set[str] | frozenset[str] = False,
     *,
+    half: bool | set[str] | frozenset[str] = False,
     attributes: Mapping[str, object] | None = None,
     compression: str = "zip",
 ) -> None:

@@ -217,8 +217,8 @@ def _parse_metadata(p: Path, text) -> dict:
 def write_panorama(
     path: str | os.PathLike,
     pano_or_arrays,
-    half: bool = True,
     *,
+    half: bool = True,
     metadata: dict | None = None,
 ) -> None:
     """Write a panorama EXR: ``R, G, B`` (float16 if ``half``, else float32), ``Z`` (float32).

@@ -47,6 +47,7 @@ def write_ply(
     path: str | os.PathLike,
     vertices,
     faces,
+    *,
     uv=None,
     vertex_colors=None,
 ) -> None:

@@ -177,9 +177,9 @@ def save_png(path: str | os.PathLike, image: np.ndarray) -> None:
 def save_radiance_preview(
     path: str | os.PathLike,
     radiance,
+    *,
     exposure_stops: float = 0.0,
     gamma: float = DISPLAY_GAMMA,
-    *,
     operator: str = "gamma",
     white: float | None = None,
 ) -> np.ndarray:

@@ -164,7 +164,7 @@ def _scanline_problem(data: np.ndarray, h: int, w: int) -> str | None:
 # Writing
 
 
-def write_hdr(path: str | os.PathLike, rgb: np.ndarray, rle: bool = True) -> None:
+def write_hdr(path: str | os.PathLike, rgb: np.ndarray, *, rle: bool = True) -> None:
     """Write (H, W, 3) linear RGB to a Radiance ``.hdr`` file (orientation ``-Y H +X W``).
 
     Mantissas are rounded to nearest (relative error <= 0.5/128 of a pixel's largest channel);

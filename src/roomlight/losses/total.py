@@ -5,10 +5,11 @@ L = L1^L + L1^D + 2 L_grad^L + L_grad^D + 0.1 L_peak + beta_t L_KL
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import torch
 
+from roomlight.config import StrictConfig
 from roomlight.errors import ShapeError
 from roomlight.losses.gradient import gradient_loss
 from roomlight.losses.kl import kl_divergence, kl_weight
@@ -19,7 +20,7 @@ __all__ = ["LossConfig", "vae_loss"]
 
 
 @dataclass(frozen=True)
-class LossConfig:
+class LossConfig(StrictConfig):
     """Weights and settings of the training objective (defaults: the paper's)."""
 
     #: Weight of the L1 loss on z-scored log1p radiance.
@@ -42,13 +43,6 @@ class LossConfig:
     peak_fraction: float = 0.005
     #: Offset inside the peak loss's log.
     peak_eps: float = 1e-6
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "LossConfig":
-        return cls(**d)
 
 
 def vae_loss(x_hat: torch.Tensor, x: torch.Tensor, mean: torch.Tensor, logvar: torch.Tensor,

@@ -6,15 +6,16 @@ the single source of truth for every shape in :mod:`roomlight.model.panovae`.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass
 
+from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
 
 __all__ = ["ModelConfig", "PRESETS", "get_preset"]
 
 
 @dataclass(frozen=True)
-class ModelConfig:
+class ModelConfig(StrictConfig):
     """Shapes and hyper-parameters of :class:`~roomlight.model.panovae.PanoVAE`.
 
     The defaults are the paper's network (13,918,628 parameters).
@@ -116,21 +117,8 @@ class ModelConfig:
                       "e.g. (-30, 20)")
 
     # ------------------------------------------------------------------ (de)serialisation
-    def to_dict(self) -> dict:
-        """JSON-friendly dict (tuples become lists)."""
-        d = asdict(self)
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "ModelConfig":
-        """Inverse of :meth:`to_dict`; unknown keys are an error (they usually mean a typo)."""
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(d) - known)
-        if unknown:
-            raise RoomlightError(
-                f"ModelConfig: unknown field(s) {unknown}; expected a subset of {sorted(known)}"
-            )
-        return cls(**d)
+    # to_dict / from_dict / override come from StrictConfig: unknown fields and wrong types are
+    # refused with the field's path (``ModelConfig.ch: expected int, got str '32'``).
 
     @classmethod
     def preset(cls, name: str) -> "ModelConfig":

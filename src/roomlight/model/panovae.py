@@ -27,7 +27,7 @@ from roomlight.model.blocks import AdaGN, AdaGNResBlock, Downsample, ResBlock, S
 from roomlight.model.config import ModelConfig
 from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.normalization import Normalization
-from roomlight.model.weights import load_state_dict_checked
+from roomlight.model.weights import CONFIG_KEYS, file_sha256, load_state_dict_checked, load_weights_file
 
 __all__ = ["Encoder", "Decoder", "PanoVAE", "WEIGHTS_NAME", "CONFIG_NAME", "FORMAT_NAME"]
 
@@ -279,6 +279,7 @@ class PanoVAE(nn.Module):
             "normalization": None if self.normalization is None else self.normalization.to_dict(),
             "metadata": self.metadata,
             "training": training_config,
+            "weights_sha256": file_sha256(directory / WEIGHTS_NAME),  # verified on load
         }
         (directory / CONFIG_NAME).write_text(json.dumps(meta, indent=2, default=str) + "\n")
         return directory
@@ -312,27 +313,39 @@ class PanoVAE(nn.Module):
 
     @classmethod
     def _load_roomlight(cls, directory: Path) -> "PanoVAE":
-        from safetensors.torch import load_file
+        from roomlight.config import check_keys
 
         cfg_path = directory / CONFIG_NAME
         try:
-            meta = json.loads(cfg_path.read_text())
-        except (OSError, json.JSONDecodeError) as e:
+            meta = json.loads(cfg_path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as e:
             raise InputFileError(cfg_path, f"cannot read JSON ({e})") from None
-        if meta.get("format") != FORMAT_NAME:
-            raise InputFileError(cfg_path, f"format is {meta.get('format')!r}, expected {FORMAT_NAME!r}")
-        if meta.get("format_version", 0) > FORMAT_VERSION:
+        if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
+            found = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
+            raise InputFileError(cfg_path, f"format is {found!r}, expected {FORMAT_NAME!r}")
+        if not isinstance(meta.get("format_version", 0), int) or meta.get("format_version", 0) > FORMAT_VERSION:
             raise InputFileError(
-                cfg_path, f"format_version {meta['format_version']} is newer than this roomlight "
+                cfg_path, f"format_version {meta['format_version']!r} is not one this roomlight "
                 f"understands ({FORMAT_VERSION})", "upgrade roomlight",
             )
-        config = ModelConfig.from_dict(meta["model"])
-        norm = meta.get("normalization")
+        try:
+            check_keys(meta, CONFIG_KEYS, "config")
+            config = ModelConfig.from_dict(meta.get("model"), where="config.model")
+            norm = meta.get("normalization")
+            norm = None if norm is None else Normalization.from_dict(norm)
+        except RoomlightError as e:
+            raise InputFileError(cfg_path, str(e)) from None
+        except (TypeError, ValueError, KeyError, AttributeError) as e:
+            raise InputFileError(cfg_path, f"config.normalization: not valid ({e})") from None
+        sha = meta.get("weights_sha256")
+        if sha is not None and not isinstance(sha, str):
+            raise InputFileError(cfg_path, f"config.weights_sha256: expected str, got {sha!r}")
         metadata = dict(meta.get("metadata") or {})
         if meta.get("training") is not None:
             metadata.setdefault("training", meta["training"])
         metadata.setdefault("saved_with_roomlight", meta.get("roomlight_version"))
-        model = cls(config, None if norm is None else Normalization.from_dict(norm), metadata)
-        state = load_file(str(directory / WEIGHTS_NAME))
+        model = cls(config, norm, metadata)
+        # Checkpoints written before the checksum was recorded have none: they load unverified.
+        state = load_weights_file(directory / WEIGHTS_NAME, sha256=sha)
         load_state_dict_checked(model, state, str(directory / WEIGHTS_NAME))
         return model

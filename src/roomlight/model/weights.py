@@ -29,3 +29,42 @@ def load_state_dict_checked(model: nn.Module, state: dict, source: str) -> None:
             "check that the config file belongs to these weights",
         )
     model.load_state_dict(state, strict=True)
+
+
+#: The top-level fields of a checkpoint's ``config.json`` (anything else is refused as a typo).
+CONFIG_KEYS = ("format", "format_version", "roomlight_version", "model", "normalization", "metadata", "training",
+               "weights_sha256")
+
+
+def file_sha256(path) -> str:
+    """Hex SHA-256 of a file, read in 1 MiB blocks."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def load_weights_file(path, sha256: str | None = None) -> dict:
+    """The tensors of a ``.safetensors`` file; a corrupt, truncated or empty file, or one whose
+    SHA-256 differs from ``sha256`` (when given), raises :class:`InputFileError` naming it."""
+    from pathlib import Path
+
+    from safetensors.torch import load_file
+
+    path = Path(path)
+    if sha256 is not None:
+        actual = file_sha256(path)
+        if actual != sha256:
+            raise InputFileError(path, f"checksum mismatch: config.json records sha256 {sha256[:12]}..., the "
+                                 f"file has {actual[:12]}... (truncated, corrupt or replaced)",
+                                 "copy the checkpoint folder again, or retrain")
+    if path.stat().st_size == 0:
+        raise InputFileError(path, "empty weights file", "copy the checkpoint folder again, or retrain")
+    try:
+        return load_file(str(path))
+    except Exception as exc:  # safetensors raises its own SafetensorError, or OSError/ValueError
+        raise InputFileError(path, f"not a readable safetensors file ({str(exc).splitlines()[0][:120]})",
+                             "copy the checkpoint folder again, or retrain") from None

@@ -84,6 +84,13 @@ def ensure_variant(prefer: str | None = None) -> str:
         raise BackendError(f"this Mitsuba build has no variant {name!r}; available: {', '.join(mi.variants())}")
     mi.set_variant(name)
     _active = name
+    threads = os.environ.get("ROOMLIGHT_THREADS", "")
+    # The command line's thread policy (roomlight.cli.threads). Dr.Jit keeps at least two workers:
+    # with one, Mitsuba's parallel scene loading waits on itself.
+    if threads.isdigit() and name.startswith("llvm"):
+        import drjit as dr
+
+        dr.set_thread_count(max(2, int(threads)))
     return name
 
 

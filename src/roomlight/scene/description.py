@@ -5,9 +5,9 @@ A scene holds a camera per view, objects with known geometry / pose / material, 
 and per view the target image and object mask. Paths are relative to the scene file.
 See ``docs/scene-format.md`` for the documented format and an example.
 
-Everything is validated when the file is loaded: a missing or invalid field, or a file that
-cannot be read, raises :class:`SceneError` naming the field (``objects[1].material.type``)
-or the file.
+Everything is validated when the file is loaded: a missing, unknown or invalid field, or a file
+that cannot be read, raises :class:`SceneError` naming the field (``objects[1].material.type``)
+or the file; an unknown field also names the closest valid one (``fov_deg``: did you mean ``fov``?).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from roomlight.config import check_keys
 from roomlight.errors import RoomlightError
 
 __all__ = ["SceneError", "CameraSpec", "MaterialSpec", "ObjectSpec", "ViewSpec", "EmitterSpec", "SceneSpec",
@@ -26,6 +27,15 @@ __all__ = ["SceneError", "CameraSpec", "MaterialSpec", "ObjectSpec", "ViewSpec",
 
 SCENE_VERSION = 1
 MATERIAL_TYPES = ("diffuse", "matte", "mirror", "principled", "glossy", "white")
+SCENE_EXTENSIONS = (".json", ".yaml", ".yml")
+
+# The fields each part of a scene description may hold; anything else is refused as a likely typo.
+_SCENE_KEYS = ("version", "objects", "views", "emitter", "metadata")
+_CAMERA_KEYS = ("origin", "target", "up", "fov", "width", "height")
+_OBJECT_KEYS = ("id", "shape", "mesh", "translate", "scale", "rotate", "material")
+_MATERIAL_KEYS = ("type", "reflectance", "base_color", "alpha", "roughness", "metallic")
+_VIEW_KEYS = ("camera", "objects", "image", "ldr", "mask")
+_EMITTER_KEYS = ("panorama", "depth")
 
 
 class SceneError(RoomlightError):
@@ -33,6 +43,10 @@ class SceneError(RoomlightError):
 
 
 # ------------------------------------------------------------------------------------ helpers
+def _keys(d, known, where: str) -> None:
+    check_keys(d, known, where, error=SceneError)
+
+
 def _get(d: dict, key: str, where: str, kind=None, default=...):
     if not isinstance(d, dict):
         raise SceneError(f"{where}: expected a mapping, got {type(d).__name__}")
@@ -41,7 +55,7 @@ def _get(d: dict, key: str, where: str, kind=None, default=...):
             raise SceneError(f"{where}.{key}: missing (required)")
         return default
     value = d[key]
-    if kind is not None and not isinstance(value, kind):
+    if kind is not None and (not isinstance(value, kind) or (isinstance(value, bool) and kind is int)):
         names = kind.__name__ if isinstance(kind, type) else "/".join(k.__name__ for k in kind)
         raise SceneError(f"{where}.{key}: expected {names}, got {value!r}")
     return value
@@ -49,6 +63,8 @@ def _get(d: dict, key: str, where: str, kind=None, default=...):
 
 def _vec(value, where: str, n: int = 3) -> tuple[float, ...]:
     try:
+        if not isinstance(value, (list, tuple)) or not all(_is_number(v) for v in value):
+            raise ValueError
         out = tuple(float(v) for v in value)
         if len(out) != n or not all(math.isfinite(v) for v in out):
             raise ValueError
@@ -57,14 +73,25 @@ def _vec(value, where: str, n: int = 3) -> tuple[float, ...]:
         raise SceneError(f"{where}: expected {n} finite numbers, got {value!r}") from None
 
 
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 def _positive(value, where: str) -> float:
     try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = float("nan")
+        v = float(value) if _is_number(value) else float("nan")
+    except OverflowError:  # an integer too large for a float
+        v = float("inf")
     if not v > 0 or not math.isfinite(v):
         raise SceneError(f"{where}: expected a positive number, got {value!r}")
     return v
+
+
+def _positive_int(value, where: str) -> int:
+    _positive(value, where)
+    if not isinstance(value, int):
+        raise SceneError(f"{where}: expected a whole number of pixels, got {value!r}")
+    return value
 
 
 def _file(root: Path, value, where: str) -> Path:
@@ -90,12 +117,13 @@ class CameraSpec:
 
     @classmethod
     def parse(cls, d: dict, where: str) -> "CameraSpec":
+        _keys(d, _CAMERA_KEYS, where)
         c = cls(origin=_vec(_get(d, "origin", where, default=[0, 0, 0]), f"{where}.origin"),
                 target=_vec(_get(d, "target", where, default=[0, 0, -1]), f"{where}.target"),
                 up=_vec(_get(d, "up", where, default=[0, 1, 0]), f"{where}.up"),
                 fov=_positive(_get(d, "fov", where, default=65.0), f"{where}.fov"),
-                width=int(_positive(_get(d, "width", where), f"{where}.width")),
-                height=int(_positive(_get(d, "height", where), f"{where}.height")))
+                width=_positive_int(_get(d, "width", where), f"{where}.width"),
+                height=_positive_int(_get(d, "height", where), f"{where}.height"))
         if c.fov >= 180:
             raise SceneError(f"{where}.fov: must be below 180 degrees, got {c.fov}")
         if np.allclose(c.origin, c.target):
@@ -130,6 +158,7 @@ class MaterialSpec:
     def parse(cls, d, where: str) -> "MaterialSpec":
         if isinstance(d, str):
             d = {"type": d}
+        _keys(d, _MATERIAL_KEYS, where)
         t = _get(d, "type", where, str)
         if t not in MATERIAL_TYPES:
             raise SceneError(f"{where}.type: expected one of {', '.join(MATERIAL_TYPES)}, got {t!r}")
@@ -139,10 +168,7 @@ class MaterialSpec:
                 params[key] = list(_vec(params[key], f"{where}.{key}"))
         for key in ("alpha", "roughness", "metallic"):
             if key in params:
-                try:
-                    v = float(params[key])
-                except (TypeError, ValueError):
-                    v = float("nan")
+                v = float(params[key]) if _is_number(params[key]) else float("nan")
                 if not 0 <= v <= 1:
                     raise SceneError(f"{where}.{key}: expected a value in [0, 1], got {params[key]!r}")
                 params[key] = v
@@ -186,6 +212,7 @@ class ObjectSpec:
     def parse(cls, d: dict, where: str, root: Path) -> "ObjectSpec":
         from roomlight.scene.shapes import BUILTIN_SHAPES
 
+        _keys(d, _OBJECT_KEYS, where)
         oid = _get(d, "id", where, str)
         shape = _get(d, "shape", where, str, default=None)
         mesh = _get(d, "mesh", where, str, default=None)
@@ -242,9 +269,10 @@ class ViewSpec:
 
     @classmethod
     def parse(cls, name: str, d: dict, where: str, root: Path, object_ids: set[str]) -> "ViewSpec":
+        _keys(d, _VIEW_KEYS, where)
         objs = _get(d, "objects", where, list)
         for i, o in enumerate(objs):
-            if o not in object_ids:
+            if not isinstance(o, str) or o not in object_ids:
                 raise SceneError(f"{where}.objects[{i}]: no object with id {o!r} (known: {', '.join(sorted(object_ids))})")
         files = {}
         for key in ("image", "ldr", "mask"):
@@ -269,6 +297,7 @@ class EmitterSpec:
 
     @classmethod
     def parse(cls, d: dict, where: str, root: Path) -> "EmitterSpec":
+        _keys(d, _EMITTER_KEYS, where)
         pano = _file(root, _get(d, "panorama", where, str), f"{where}.panorama")
         depth = _get(d, "depth", where, str, default=None)
         return cls(pano, _file(root, depth, f"{where}.depth") if depth else None)
@@ -322,6 +351,7 @@ def _relative(path: Path, root: Path) -> str:
 def parse_scene(data: dict, root: Path, where: str = "scene") -> SceneSpec:
     """Validate a scene mapping (as read from JSON/YAML) into a :class:`SceneSpec`."""
     root = Path(root)
+    _keys(data, _SCENE_KEYS, where)
     version = _get(data, "version", where, int, default=SCENE_VERSION)
     if version != SCENE_VERSION:
         raise SceneError(f"{where}.version: this roomlight reads version {SCENE_VERSION}, got {version}")
@@ -335,6 +365,9 @@ def parse_scene(data: dict, root: Path, where: str = "scene") -> SceneSpec:
     views_raw = _get(data, "views", where, dict)
     if not views_raw:
         raise SceneError(f"{where}.views: at least one view is required")
+    for name in views_raw:
+        if not isinstance(name, str) or not name:
+            raise SceneError(f"{where}.views: view names must be non-empty strings, got {name!r}")
     views = {name: ViewSpec.parse(name, vd, f"{where}.views.{name}", root, set(objects))
              for name, vd in views_raw.items()}
     em = _get(data, "emitter", where, dict, default=None)
@@ -356,7 +389,14 @@ def read_scene(path) -> SceneSpec:
                 break
     if not p.is_file():
         raise SceneError(f"{p}: no such scene file")
-    text = p.read_text()
+    if p.suffix.lower() not in SCENE_EXTENSIONS:
+        raise SceneError(f"{p}: expected a scene description (.json, .yaml or .yml, see docs/scene-format.md), "
+                         f"got a {p.suffix or 'file without extension'}")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise SceneError(f"{p}: not a text file; expected a scene description in JSON or YAML "
+                         "(see docs/scene-format.md)") from None
     try:
         if p.suffix.lower() in (".yaml", ".yml"):
             import yaml

@@ -12,8 +12,10 @@ the list of differing fields.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import asdict, dataclass, field, fields
+import math
+from dataclasses import dataclass, field
 
+from roomlight.config import StrictConfig, checked_fields
 from roomlight.errors import RoomlightError
 from roomlight.losses import LossConfig
 from roomlight.model.config import ModelConfig, get_preset
@@ -22,7 +24,7 @@ __all__ = ["TrainConfig", "TRAIN_PRESETS", "get_train_preset", "RESUME_SAFE_FIEL
 
 
 @dataclass(frozen=True)
-class TrainConfig:
+class TrainConfig(StrictConfig):
     """Everything that defines a training run of :class:`~roomlight.model.PanoVAE`."""
 
     #: Model architecture preset name (``default`` = the paper's network, ``small``, ``tiny``).
@@ -55,6 +57,10 @@ class TrainConfig:
     aug_tilt_deg: float = 7.0
     #: Exposure-calibrate each panorama to unit log-average luminance when loading.
     calibrate: bool = True
+    #: Clamp negative radiance to 0 when loading (the count is reported); otherwise such files are skipped.
+    clamp_negative: bool = False
+    #: Replace NaN/inf radiance by this value when loading (reported); None skips such files.
+    fill_nonfinite: float | None = None
     #: Depth units fed to the network: ``metres`` (as stored) or ``scale-free`` (geometric mean 1).
     depth_units: str = "metres"
     #: Share of files held out for validation when the data folder has no train/ val/ folders.
@@ -117,12 +123,11 @@ class TrainConfig:
             raise bad("amp", "use 'auto', 'bf16' or 'off'")
         if self.compile not in ("auto", "on", "off"):
             raise bad("compile", "use 'auto', 'on' or 'off'")
+        if self.fill_nonfinite is not None and not math.isfinite(self.fill_nonfinite):
+            raise bad("fill_nonfinite", "must be a finite number or None")
         if not 0.0 <= self.aug_tilt_deg <= 90.0:
             raise bad("aug_tilt_deg", "must be in [0, 90] degrees")
-        try:
-            LossConfig.from_dict(self.loss)
-        except TypeError as e:
-            raise bad("loss", f"not a valid LossConfig ({e})") from None
+        LossConfig.from_dict(self.loss, where="TrainConfig.loss")  # names the entry and its type
 
     # ------------------------------------------------------------------ derived
     @property
@@ -136,30 +141,16 @@ class TrainConfig:
         return LossConfig.from_dict(self.loss)
 
     # ------------------------------------------------------------------ (de)serialisation
-    def to_dict(self) -> dict:
-        """JSON-friendly dict (tuples become lists)."""
-        d = asdict(self)
-        d["betas"] = list(self.betas)
-        return d
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "TrainConfig":
-        """Inverse of :meth:`to_dict`; unknown keys are an error (usually a typo)."""
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(d) - known)
-        if unknown:
-            raise RoomlightError(f"TrainConfig: unknown field(s) {unknown}; expected a subset of {sorted(known)}")
-        return cls(**d)
+    # to_dict / from_dict come from StrictConfig: unknown fields and wrong types are refused with
+    # the field's path and, for a misspelt name, the closest valid one.
 
     def replace(self, **overrides) -> "TrainConfig":
         """A copy with some fields replaced (``loss`` entries may be given as ``loss={...}``, merged)."""
-        if "loss" in overrides:
+        if isinstance(overrides.get("loss"), dict):
             overrides["loss"] = {**self.loss, **overrides["loss"]}
-        known = {f.name for f in fields(self)}
-        unknown = sorted(set(overrides) - known)
-        if unknown:
-            raise RoomlightError(f"TrainConfig: unknown field(s) {unknown}")
-        return dataclasses.replace(self, **overrides)
+        return dataclasses.replace(self, **checked_fields(type(self), overrides))
+
+    override = replace
 
 
 #: Fields that may differ when a run is resumed: they change logging, speed or book-keeping, not

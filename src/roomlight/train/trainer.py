@@ -37,6 +37,7 @@ from roomlight.model import Normalization, PanoVAE
 from roomlight.train import checkpoint as ck
 from roomlight.train.config import TrainConfig, config_differences
 from roomlight.train.distributed import all_reduce_mean, barrier, broadcast_flag, init_distributed
+from roomlight.train.interrupt import Interrupted, deferred_interrupts
 from roomlight.train.logger import RunLogger
 from roomlight.train.schedule import learning_rate
 
@@ -77,9 +78,16 @@ class Trainer:
         self.last_checkpoint: Path | None = None
         self.total_steps = config.max_steps or config.epochs * self.sampler.batches_per_epoch
         latest = ck.latest_checkpoint(self.run_dir)
+        resume_step = None
         if latest is not None:
             self._resume(latest)
-        self.log = RunLogger(self.run_dir, enabled=main, resume_step=self.step if latest else None, note=self.note)
+            resume_step = self.step
+        elif (self.run_dir / "log.jsonl").exists():
+            # An earlier process stopped (killed) before its first checkpoint: nothing to resume,
+            # and its log lines go, so that the log holds each step once.
+            self.note(f"{self.run_dir}: no checkpoint to resume from; starting afresh at step 0")
+            resume_step = -1
+        self.log = RunLogger(self.run_dir, enabled=main, resume_step=resume_step, note=self.note)
         self._reported: set[str] = set()
         if fresh and main:  # recorded only once the data and model are set up, so a failed start binds nothing
             from roomlight import __version__
@@ -114,14 +122,15 @@ class Trainer:
         if cfg.cache:
             files = splits["train"] + splits["val"]
             path = self._cache_path()
+            pack = dict(path=path, dtype=cfg.cache_dtype, calibrate=cfg.calibrate, depth_units=cfg.depth_units,
+                        clamp_negative=cfg.clamp_negative, fill_nonfinite=cfg.fill_nonfinite)
             if self.dist.is_main:
-                PackedCache.open_or_build(self.data_dir, files, res, path=path, dtype=cfg.cache_dtype,
-                                          calibrate=cfg.calibrate, depth_units=cfg.depth_units,
-                                          workers=cfg.num_workers, progress=cfg.progress, log=self.note)
+                PackedCache.open_or_build(self.data_dir, files, res, workers=cfg.num_workers, progress=cfg.progress,
+                                          log=self.note, **pack)
             barrier(self.dist)
-            cache = PackedCache.open_or_build(self.data_dir, files, res, path=path, dtype=cfg.cache_dtype,
-                                              calibrate=cfg.calibrate, depth_units=cfg.depth_units, progress=False)
-        kw = dict(root=self.data_dir, calibrate=cfg.calibrate, depth_units=cfg.depth_units, cache=cache)
+            cache = PackedCache.open_or_build(self.data_dir, files, res, progress=False, **pack)
+        kw = dict(root=self.data_dir, calibrate=cfg.calibrate, depth_units=cfg.depth_units, cache=cache,
+                  clamp_negative=cfg.clamp_negative, fill_nonfinite=cfg.fill_nonfinite)
         self.train_set = PanoramaDataset(splits["train"], res, **kw)
         self.val_set = PanoramaDataset(splits["val"], res, **kw) if splits["val"] else None
         batch = cfg.batch_size
@@ -151,7 +160,14 @@ class Trainer:
         norm_path = self.run_dir / "normalization.json"
         if not norm_path.exists() and self.dist.is_main:
             self.note(f"computing normalisation statistics over {len(self.train_set)} training panoramas")
-            norm, skipped = normalization_from_dataset(self.train_set, progress=cfg.progress)
+            from roomlight.data.stats import NoUsablePanorama
+
+            try:
+                norm, skipped = normalization_from_dataset(self.train_set, progress=cfg.progress)
+            except NoUsablePanorama as exc:
+                for name, why in exc.skipped:
+                    self.note(f"skipping {name}: {why}")
+                raise RoomlightError(f"no usable panorama in {self.data_dir}") from None
             for name, why in skipped:
                 self.note(f"skipping {name}: {why}")
             ck.atomic_write_text(norm_path, json.dumps(norm.to_dict(), indent=2) + "\n")
@@ -373,11 +389,12 @@ class Trainer:
 
     # ------------------------------------------------------------------ the loop
     def _report_skipped(self, skipped) -> None:
-        for name, why in skipped:
+        """Each skipped file (name, reason) and repaired file (name, None, repair) once per run."""
+        for name, why, *fix in skipped:
             if name not in self._reported:
                 self._reported.add(name)
-                self.note(f"skipping {name}: {why}")
-                self.log.event("skipped", self.step, file=name, reason=why)
+                self.note(f"note: {fix[0]}" if fix else f"skipping {name}: {why}")
+                self.log.event("repaired" if fix else "skipped", self.step, file=name, reason=fix[0] if fix else why)
 
     def fit(self, until: int | None = None, time_budget_s: float | None = None) -> dict:
         """Train up to step ``until`` (default: the end of the schedule); returns a summary.
@@ -387,8 +404,10 @@ class Trainer:
         give several recipes the same CPU budget, or to train in sittings. The schedule is not
         changed by it, so the run continues exactly when called again.
 
-        Writes a checkpoint at the end, every ``ckpt_every`` steps, and on Ctrl-C (then re-raises
-        ``KeyboardInterrupt``): re-running continues from it.
+        Writes a checkpoint at the end, every ``ckpt_every`` steps, and on Ctrl-C or SIGTERM: the
+        signal is held until the current step is complete, then that step is checkpointed and
+        :class:`~roomlight.train.interrupt.Interrupted` (a ``KeyboardInterrupt``) is raised, so
+        re-running continues exactly as if nothing had happened.
         """
         from tqdm import tqdm
 
@@ -398,20 +417,26 @@ class Trainer:
         if self.step >= stop:
             self.note(f"{self.run_dir}: already at step {self.step} of {self.total_steps}; nothing to do")
             return self.summary()
-        bpe = self.sampler.batches_per_epoch
         self.sampler.start = self.position
         loader = DataLoader(self.train_set, batch_sampler=self.sampler, collate_fn=collate_panoramas,
                             num_workers=cfg.num_workers, pin_memory=self.device.type == "cuda")
         bar = tqdm(total=stop, initial=self.step, desc="train", unit="step", disable=not (main and cfg.progress),
                    dynamic_ncols=True)
-        window, t0, seen = {}, time.perf_counter(), 0
         self.last_train: dict = {}
         it = iter(loader)
+        with deferred_interrupts(self.note if main else None) as signalled:
+            self._loop(it, stop, deadline, bar, signalled)
+        return self.summary()
+
+    def _loop(self, it, stop: int, deadline, bar, signalled) -> None:
+        cfg, main = self.cfg, self.dist.is_main
+        bpe = self.sampler.batches_per_epoch
+        window, t0, seen = {}, time.perf_counter(), 0
         try:
             while self.step < stop:
                 batch = next(it)
                 self.position += 1
-                self._report_skipped(batch["skipped"])
+                self._report_skipped(batch["skipped"] + [(n, None, fix) for n, fix in batch.get("fixes", [])])
                 if broadcast_flag(batch["radiance"] is None, self.dist):
                     continue
                 out = self.train_step(batch["radiance"], batch["depth"], batch["names"])
@@ -444,15 +469,19 @@ class Trainer:
                     self.write_images()
                 if self.step % cfg.ckpt_every == 0 or self.step == stop:
                     self.save_checkpoint()
-        except KeyboardInterrupt:
+                if broadcast_flag(signalled.signum is not None, self.dist):
+                    raise Interrupted(signalled.signum or 2)  # at a step boundary: the state is consistent
+        except KeyboardInterrupt as exc:
             bar.close()
+            if isinstance(exc, Interrupted) and not exc.clean:
+                self.note(f"stopped during step {self.step + 1}; the last checkpoint is {self.last_checkpoint}")
+                raise
             path = self.save_checkpoint()
             self.note(f"interrupted at step {self.step}; saved {path}. Run the same command again to continue.")
             raise
         finally:
             bar.close()
             del it
-        return self.summary()
 
     def summary(self) -> dict:
         """Where the run stands: step, schedule length, last train losses, best validation loss, paths."""

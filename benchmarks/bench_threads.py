@@ -1,0 +1,120 @@
+"""The command line's thread policy against torch's defaults, as found and next to a busy process.
+
+The workload is the core of ``roomlight fit-pano``: a latent fit of the bundled prior to the
+built-in example room (``--steps`` Adam steps of decoder forward + backward), in a fresh process
+per measurement so that OpenMP's settings take effect:
+
+- ``before``: torch's defaults (as many threads as the machine has, OpenMP's spinning wait);
+- ``passive``: torch's thread count, but OpenMP threads that sleep when idle;
+- ``after``: roomlight's policy (``roomlight.cli.threads``: passive waiting, threads from the
+  CPUs available less the busy ones).
+
+"Under load" runs the same while ``--busy`` other processes spin on the CPU (a pure-Python loop
+each, like any other job). Times are the median of ``--repeats`` runs, in seconds for the fit
+alone (process start and model loading excluded).
+
+Run: .venv/bin/python benchmarks/bench_threads.py [--steps 100] [--repeats 3] [--busy 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+CHILD = r"""
+import json, os, sys, time
+if os.environ.get("BENCH_POLICY") == "passive":
+    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
+if os.environ.get("BENCH_POLICY") == "after":
+    from roomlight.cli.threads import apply_thread_policy, measured_threads, prepare_environment
+    prepare_environment()
+    os.environ["ROOMLIGHT_THREADS"] = str(measured_threads())
+    apply_thread_policy()
+import torch
+from roomlight.demo import bundled_prior_path
+from roomlight.examples import example_room
+from roomlight.fit import LatentFitConfig, fit_latent
+from roomlight.model import PanoVAE
+
+model = PanoVAE.from_pretrained(bundled_prior_path())
+h, w = model.config.resolution
+rad, dep = example_room(h)
+rad = rad.permute(2, 0, 1)[None].float()
+dep = dep[None, None].float()
+fit_latent(model, rad, dep, LatentFitConfig(steps=2))  # warm-up
+t = time.perf_counter()
+fit_latent(model, rad, dep, LatentFitConfig(steps=int(sys.argv[1])))
+print(json.dumps({"seconds": time.perf_counter() - t, "threads": torch.get_num_threads(),
+                  "wait": os.environ.get("OMP_WAIT_POLICY", "default")}))
+"""
+
+
+def _spin(stop) -> None:
+    x = 0
+    while not stop.is_set():
+        x = (x * 1103515245 + 12345) % 2147483648
+
+
+def run_once(policy: str, steps: int) -> dict:
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OMP_WAIT_POLICY", "OMP_NUM_THREADS", "KMP_BLOCKTIME", "ROOMLIGHT_THREADS")}
+    env["BENCH_POLICY"] = policy
+    src = Path(__file__).resolve().parents[1] / "src"
+    env["PYTHONPATH"] = os.pathsep.join([str(src), env.get("PYTHONPATH", "")])
+    out = subprocess.run([sys.executable, "-c", CHILD, str(steps)], env=env, capture_output=True, text=True,
+                         check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def measure(policy: str, steps: int, repeats: int) -> dict:
+    runs = [run_once(policy, steps) for _ in range(repeats)]
+    return {"seconds": statistics.median(r["seconds"] for r in runs), "threads": runs[-1]["threads"],
+            "wait": runs[-1]["wait"]}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=100, help="latent-fit steps per measurement")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--busy", type=int, default=1, help="busy processes for the 'under load' row")
+    args = ap.parse_args()
+    load = os.getloadavg()[0]
+
+    rows = []
+    for load in ("as found", "under load"):
+        stop = multiprocessing.Event()
+        spinners = []
+        if load == "under load":
+            spinners = [multiprocessing.Process(target=_spin, args=(stop,), daemon=True) for _ in range(args.busy)]
+            for p in spinners:
+                p.start()
+            time.sleep(0.5)
+        try:
+            before = measure("before", args.steps, args.repeats)
+            passive = measure("passive", args.steps, args.repeats)
+            after = measure("after", args.steps, args.repeats)
+        finally:
+            stop.set()
+            for p in spinners:
+                p.join()
+        rows.append((load, before, passive, after))
+
+    print(f"Latent fit of the bundled prior, {args.steps} steps; median of {args.repeats}; "
+          f"{os.cpu_count()} CPUs, load average before the run {load:.2f}\n")
+    print("| machine | before: torch defaults | passive waiting only | after: roomlight's policy | speed-up |")
+    print("|---|---:|---:|---:|---:|")
+    for load, *cols in rows:
+        label = load if load == "as found" else f"{load} (+{args.busy} busy process{'es' if args.busy > 1 else ''})"
+        cells = " | ".join(f"{c['seconds']:.2f} s ({c['threads']} thr., {c['wait'].lower()})" for c in cols)
+        print(f"| {label} | {cells} | {cols[0]['seconds'] / cols[-1]['seconds']:.1f}× |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,110 @@
+"""Thread policy of the command line: how many threads torch and Dr.Jit use, and how they wait.
+
+A roomlight command alternates between Mitsuba (Dr.Jit's thread pool) and torch (OpenMP). Left
+alone, OpenMP's worker threads spin at 100 % between parallel regions (GNU OpenMP spins for
+about 300,000 iterations before sleeping), which steals the cores from Dr.Jit's phase and, on a
+machine where anything else runs, from the other process; and torch sizes its pool by the
+machine's cores, not the ones this process may run on (a container, ``taskset``, a batch slot).
+The policy, applied once when ``roomlight`` starts:
+
+- ``OMP_WAIT_POLICY=PASSIVE`` (and ``KMP_BLOCKTIME=0`` for Intel's OpenMP): idle threads sleep
+  at once. Set before torch is imported, unless the user already set it;
+- threads: ``--threads N``, else ``$ROOMLIGHT_THREADS``, else the CPUs this process may use
+  (``os.sched_getaffinity``) less those other processes keep busy, measured over 50 ms when the
+  program starts (``/proc/stat``), at least one; for torch and for Dr.Jit alike. A thread more
+  than the free cores makes every parallel region wait for the one that is descheduled.
+
+``benchmarks/bench_threads.py`` measures the policy against torch's defaults, idle and next to a
+busy process (README, Troubleshooting).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+from roomlight.errors import RoomlightError
+
+__all__ = ["ENV_THREADS", "available_cpus", "prepare_environment", "thread_count", "apply_thread_policy",
+           "default_threads", "busy_cpus", "measured_threads"]
+
+ENV_THREADS = "ROOMLIGHT_THREADS"
+
+
+def available_cpus() -> int:
+    """CPUs this process may run on (its affinity mask; the machine's count where that is unknown)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def busy_cpus(interval: float = 0.05) -> float:
+    """CPUs kept busy by all processes over ``interval`` seconds (from ``/proc/stat``; 0 where unreadable)."""
+    def snapshot():
+        with open("/proc/stat") as f:
+            values = [int(v) for v in f.readline().split()[1:9]]
+        return sum(values), values[3] + values[4]  # total, idle + iowait
+
+    try:
+        total0, idle0 = snapshot()
+        time.sleep(interval)
+        total1, idle1 = snapshot()
+    except (OSError, ValueError, IndexError):
+        return 0.0
+    if total1 <= total0:
+        return 0.0
+    return max(0.0, 1.0 - (idle1 - idle0) / (total1 - total0)) * (os.cpu_count() or 1)
+
+
+def measured_threads() -> int:
+    """:func:`available_cpus` less the CPUs other processes keep busy right now, at least 1."""
+    return max(1, available_cpus() - int(busy_cpus() + 0.5))
+
+
+def prepare_environment() -> None:
+    """Passive waiting for OpenMP threads; must run before torch is imported to take effect."""
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    os.environ.setdefault("KMP_BLOCKTIME", "0")
+
+
+def thread_count(option: int | None = None) -> int:
+    """``option``, else ``$ROOMLIGHT_THREADS``, else :func:`available_cpus`."""
+    if option is not None:
+        return int(option)
+    raw = os.environ.get(ENV_THREADS, "").strip()
+    if not raw:
+        return available_cpus()
+    try:
+        n = int(raw)
+        if n < 1:
+            raise ValueError
+    except ValueError:
+        raise RoomlightError(f"{ENV_THREADS}={raw!r}: expected a positive whole number of threads") from None
+    return n
+
+
+def apply_thread_policy(option: int | None = None) -> int | None:
+    """Apply an explicit thread count (``option``, else ``$ROOMLIGHT_THREADS``); returns it, or None
+    when neither is given (then nothing changes).
+
+    The count is exported as ``$ROOMLIGHT_THREADS`` and ``$OMP_NUM_THREADS`` so that worker
+    processes and the Mitsuba setup (:func:`roomlight.render.variant.ensure_variant`) use the
+    same number. The ``roomlight`` program sets ``$ROOMLIGHT_THREADS`` to :func:`available_cpus`
+    when it starts (see :func:`default_threads`), so a command always runs under the policy; code
+    that calls the command group in-process keeps its own settings unless it asks.
+    """
+    if option is None and not os.environ.get(ENV_THREADS, "").strip():
+        return None
+    n = thread_count(option)
+    os.environ[ENV_THREADS] = os.environ["OMP_NUM_THREADS"] = str(n)
+    if "torch" in sys.modules:  # torch reads OMP_NUM_THREADS only when it loads
+        sys.modules["torch"].set_num_threads(n)
+    return n
+
+
+def default_threads() -> None:
+    """``$ROOMLIGHT_THREADS`` defaults to :func:`measured_threads` (the program's start)."""
+    if not os.environ.get(ENV_THREADS, "").strip():
+        os.environ[ENV_THREADS] = str(measured_threads())

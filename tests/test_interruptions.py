@@ -1,0 +1,238 @@
+"""Long commands killed at a random point (SIGINT, SIGTERM, SIGKILL), then re-run, against an
+uninterrupted run: the same result, bit for bit where the command is deterministic, and no item
+lost or duplicated.
+
+Each command runs in a child process (``python -m roomlight.cli.main``) so that the signal reaches
+it exactly as a user's Ctrl-C, a scheduler's SIGTERM or the out-of-memory killer's SIGKILL would.
+The point of the kill is random within the run (after the first sign of progress, plus a random
+delay), seeded so that a failure can be replayed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from safetensors.torch import load_file
+
+from roomlight.data import write_toy_dataset
+
+ENV = {**os.environ, "OMP_NUM_THREADS": "1", "ROOMLIGHT_THREADS": "1",
+       "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[1] / "src"), os.environ.get("PYTHONPATH", "")])}
+
+
+def roomlight(*args, check=True, timeout=300) -> subprocess.CompletedProcess:
+    r = subprocess.run([sys.executable, "-m", "roomlight.cli.main", *map(str, args)], env=ENV, text=True,
+                       capture_output=True, timeout=timeout)
+    if check:
+        assert r.returncode == 0, r.stderr[-3000:]
+    return r
+
+
+def kill_when(args, ready, sig: int, seed: int, max_delay: float, timeout: float = 240.0):
+    """Start ``roomlight ARGS``, wait until ``ready()`` is true, wait a random delay, send ``sig``.
+
+    Returns (exit status, stderr). The process must still be running when the signal is sent,
+    otherwise the test would not test an interruption.
+    """
+    proc = subprocess.Popen([sys.executable, "-m", "roomlight.cli.main", *map(str, args)], env=ENV, text=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    t_end = time.monotonic() + timeout
+    while not ready():
+        assert proc.poll() is None, f"finished before it could be interrupted: {proc.stderr.read()[-2000:]}"
+        assert time.monotonic() < t_end, "never became ready"
+        time.sleep(0.02)
+    time.sleep(random.Random(seed).uniform(0.0, max_delay))
+    assert proc.poll() is None, "finished before the signal"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    return proc.returncode, err
+
+
+def train_steps(run: Path) -> list[int]:
+    log = run / "log.jsonl"
+    if not log.exists():
+        return []
+    out = []
+    for line in log.read_text().splitlines():
+        try:
+            rec = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if rec.get("event") == "train":
+            out.append(rec["step"])
+    return out
+
+
+def final_weights(run: Path, step: int) -> dict:
+    return load_file(str(run / "checkpoints" / f"step-{step:08d}" / "model.safetensors"))
+
+
+def assert_bit_identical(a: dict, b: dict) -> None:
+    assert a.keys() == b.keys()
+    differing = [k for k in a if not (a[k].shape == b[k].shape and bool((a[k] == b[k]).all()))]
+    assert not differing, f"{len(differing)} tensors differ, e.g. {differing[:3]}"
+
+
+STEPS = 60
+TRAIN_ARGS = ["--config", "tiny", "--max-steps", STEPS, "--workers", 0, "--no-cache", "--set", "progress=false",
+              "--set", "log_every=1", "--set", "val_fraction=0", "--set", "val_every=0", "--set", "ckpt_every=1000"]
+
+
+@pytest.fixture(scope="module")
+def toy(tmp_path_factory):
+    root = tmp_path_factory.mktemp("toy")
+    write_toy_dataset(root, 8, 32)
+    return root
+
+
+@pytest.fixture(scope="module")
+def straight_run(toy, tmp_path_factory):
+    run = tmp_path_factory.mktemp("straight") / "run"
+    roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
+    assert train_steps(run) == list(range(1, STEPS + 1))
+    return run
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_train_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_path, sig):
+    """Three interruptions at random points (most land inside an optimiser step), then the rest."""
+    run = tmp_path / "run"
+    for round_ in range(3):
+        before = max(train_steps(run), default=0)
+        code, err = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS],
+                              lambda: max(train_steps(run), default=0) >= before + 2, sig,
+                              seed=10 * int(sig) + round_, max_delay=0.3)
+        assert code == 128 + sig, err[-2000:]
+        assert "Traceback" not in err
+        stopped = max(train_steps(run))
+        assert stopped < STEPS
+        assert (run / "checkpoints" / f"step-{stopped:08d}").is_dir(), "the last logged step is the one checkpointed"
+    r = roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
+    assert f"step {stopped} of {STEPS}" in r.stderr + r.stdout
+    assert train_steps(run) == list(range(1, STEPS + 1))
+    assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
+
+
+def test_train_killed_before_its_first_checkpoint_starts_afresh(toy, straight_run, tmp_path):
+    run = tmp_path / "run"
+    code, _ = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], lambda: len(train_steps(run)) >= 2,
+                        signal.SIGKILL, seed=9, max_delay=0.3)
+    assert code == -signal.SIGKILL
+    assert not (run / "checkpoints").exists() or not any((run / "checkpoints").glob("step-*"))
+    assert train_steps(run), "the killed run had logged steps"
+    r = roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
+    assert "no checkpoint to resume from; starting afresh at step 0" in r.stderr + r.stdout
+    assert train_steps(run) == list(range(1, STEPS + 1))  # each step once
+    assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
+
+
+# ----------------------------------------------------------------------------- synth, bench make, bench run
+ALL_SIGNALS = pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL],
+                                      ids=["SIGINT", "SIGTERM", "SIGKILL"])
+
+
+def exr_pixels(root: Path, pattern: str) -> dict:
+    """{relative path: {channel: array}} of every finished EXR under ``root``."""
+    from roomlight.io import read_exr
+
+    return {p.relative_to(root).as_posix(): read_exr(p) for p in sorted(root.glob(pattern))
+            if ".partial" not in p.name and not p.name.startswith(".")}
+
+
+def assert_same_exrs(a: dict, b: dict) -> None:
+    assert sorted(a) == sorted(b), "lost or extra files"
+    for name in a:
+        for ch in a[name]:
+            assert (a[name][ch] == b[name][ch]).all(), f"{name} channel {ch} differs"
+
+
+def interrupt_and_rerun(args, out: Path, ready, sig: int, seed: int):
+    code, err = kill_when(args, ready, sig, seed=seed, max_delay=1.0)
+    assert code != 0, "the command was interrupted"
+    assert "Traceback" not in err or sig != signal.SIGKILL
+    roomlight(*args)
+
+
+SYNTH = ["synth", "--n", 3, "--res", "16x32", "--spp", 4, "--no-denoise", "--workers", 1, "--no-summary"]
+
+
+@pytest.fixture(scope="module")
+def synth_straight(tmp_path_factory):
+    out = tmp_path_factory.mktemp("synth") / "rooms"
+    roomlight(*SYNTH, "--out", out)
+    return exr_pixels(out, "**/*.exr")
+
+
+@pytest.mark.mitsuba
+@ALL_SIGNALS
+def test_synth_interrupted_then_rerun_renders_every_room_once_and_identically(synth_straight, tmp_path, sig):
+    out = tmp_path / "rooms"
+    interrupt_and_rerun([*SYNTH, "--out", out], out, lambda: any(out.glob("**/*.exr")), sig, seed=int(sig))
+    assert_same_exrs(exr_pixels(out, "**/*.exr"), synth_straight)
+    assert not list(out.glob("**/*.partial.exr")), "a partial file was left behind"
+
+
+def bench_make_args(panos, out):
+    return ["bench", "make", "--panos", panos, "--out", out, "--n", 2, "--emitter-res", 16, "--res", "16x16",
+            "--spp", 4, "--materials", "diffuse", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def bench_straight(toy, tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench") / "bench"
+    roomlight(*bench_make_args(toy, out))
+    return out
+
+
+def manifest_scenes(bench: Path) -> list:
+    return [s["id"] for s in json.loads((bench / "manifest.json").read_text())["scenes"]]
+
+
+@pytest.mark.mitsuba
+@ALL_SIGNALS
+def test_bench_make_interrupted_then_rerun_builds_every_scene_once_and_identically(toy, bench_straight, tmp_path, sig):
+    out = tmp_path / "bench"
+    interrupt_and_rerun(bench_make_args(toy, out), out, lambda: any(out.glob("*/panorama.json")), sig,
+                        seed=int(sig) + 100)
+    assert manifest_scenes(out) == manifest_scenes(bench_straight)
+    assert len(set(manifest_scenes(out))) == 2
+    assert_same_exrs(exr_pixels(out, "*/*/*.exr"), exr_pixels(bench_straight, "*/*/*.exr"))
+
+
+RUN = ["--methods", "direct-envmap", "--preset", "fast", "--iterations", 3, "--fit-spp", 2, "--eval-spp", 4,
+       "--quiet"]
+
+
+def results(out: Path) -> dict:
+    """{case: scores} of every finished case (timings left out)."""
+    found = {}
+    for p in sorted(out.glob("cases/*/*/*/result.json")):  # fit/result.json is the fit's own
+        rec = json.loads(p.read_text())
+        found[p.parent.relative_to(out).as_posix()] = json.dumps(rec.get("metrics", rec.get("scores")), sort_keys=True)
+    return found
+
+
+@pytest.fixture(scope="module")
+def run_straight(bench_straight, tmp_path_factory):
+    out = tmp_path_factory.mktemp("run") / "results"
+    roomlight("bench", "run", bench_straight, "--out", out, *RUN)
+    return results(out)
+
+
+@pytest.mark.mitsuba
+@ALL_SIGNALS
+def test_bench_run_interrupted_then_rerun_runs_every_case_once_and_identically(bench_straight, run_straight, tmp_path,
+                                                                              sig):
+    out = tmp_path / "results"
+    interrupt_and_rerun(["bench", "run", bench_straight, "--out", out, *RUN], out,
+                        lambda: any(out.glob("cases/*/*/*/result.json")), sig, seed=int(sig) + 200)
+    assert len(run_straight) == 2
+    assert results(out) == run_straight
