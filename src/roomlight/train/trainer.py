@@ -409,7 +409,7 @@ class Trainer:
         :class:`~roomlight.train.interrupt.Interrupted` (a ``KeyboardInterrupt``) is raised, so
         re-running continues exactly as if nothing had happened.
         """
-        from tqdm import tqdm
+        from roomlight.progress import progress_bar
 
         cfg, main = self.cfg, self.dist.is_main
         stop = min(until or self.total_steps, self.total_steps)
@@ -420,8 +420,8 @@ class Trainer:
         self.sampler.start = self.position
         loader = DataLoader(self.train_set, batch_sampler=self.sampler, collate_fn=collate_panoramas,
                             num_workers=cfg.num_workers, pin_memory=self.device.type == "cuda")
-        bar = tqdm(total=stop, initial=self.step, desc="train", unit="step", disable=not (main and cfg.progress),
-                   dynamic_ncols=True)
+        bar = progress_bar(total=stop, initial=self.step, desc="train", unit="step",
+                           disable=not (main and cfg.progress))
         self.last_train: dict = {}
         it = iter(loader)
         with deferred_interrupts(self.note if main else None) as signalled:
