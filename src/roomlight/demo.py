@@ -55,7 +55,10 @@ def _room(cfg: DemoConfig):
     except ImportError:
         render_room = None
     if render_room is not None:
-        rad, depth, meta = render_room(cfg.seed, height=cfg.height, spp=64)
+        from roomlight.synth.denoise import denoise_available
+
+        # The same settings as `roomlight synth`'s default: 64 spp, denoised when OIDN is installed.
+        rad, depth, meta = render_room(cfg.seed, height=cfg.height, spp=64, denoise=denoise_available())
         return rad, depth, f"procedural room (seed {cfg.seed})"
     from roomlight.examples import example_room
 

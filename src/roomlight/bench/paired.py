@@ -82,8 +82,9 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
 def _cell(s: dict, metric: str) -> str:
     digits = 2 if metric == "psnr_ldr" else 3
     lo, hi = s["ci95"]
-    sure = (lo > 0) if s["better"] == "higher" else (hi < 0)
-    worse = (hi < 0) if s["better"] == "higher" else (lo > 0)
+    # One scene gives a zero-width interval that decides nothing: no mark.
+    sure = s["n"] > 1 and ((lo > 0) if s["better"] == "higher" else (hi < 0))
+    worse = s["n"] > 1 and ((hi < 0) if s["better"] == "higher" else (lo > 0))
     mark = " ✓" if sure else " ✗" if worse else ""
     return f"{s['mean']:+.{digits}f} [{lo:+.{digits}f}, {hi:+.{digits}f}] {s['wins']}/{s['n']}{mark}"
 
