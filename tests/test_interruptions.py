@@ -154,8 +154,8 @@ def assert_same_exrs(a: dict, b: dict) -> None:
             assert (a[name][ch] == b[name][ch]).all(), f"{name} channel {ch} differs"
 
 
-def interrupt_and_rerun(args, out: Path, ready, sig: int, seed: int):
-    code, err = kill_when(args, ready, sig, seed=seed, max_delay=1.0)
+def interrupt_and_rerun(args, out: Path, ready, sig: int, seed: int, max_delay: float = 1.0):
+    code, err = kill_when(args, ready, sig, seed=seed, max_delay=max_delay)
     assert code != 0, "the command was interrupted"
     assert "Traceback" not in err or sig != signal.SIGKILL
     roomlight(*args)
@@ -181,7 +181,7 @@ def test_synth_interrupted_then_rerun_renders_every_room_once_and_identically(sy
 
 
 def bench_make_args(panos, out):
-    return ["bench", "make", "--panos", panos, "--out", out, "--n", 2, "--emitter-res", 16, "--res", "16x16",
+    return ["bench", "make", "--panos", panos, "--out", out, "--n", 6, "--emitter-res", 16, "--res", "16x16",
             "--spp", 4, "--materials", "diffuse", "--quiet"]
 
 
@@ -200,10 +200,12 @@ def manifest_scenes(bench: Path) -> list:
 @ALL_SIGNALS
 def test_bench_make_interrupted_then_rerun_builds_every_scene_once_and_identically(toy, bench_straight, tmp_path, sig):
     out = tmp_path / "bench"
+    # Six scenes and a delay of at most 0.3 s after the first: on a fast, quiet machine two scenes
+    # and a 1 s delay let the command finish before the signal.
     interrupt_and_rerun(bench_make_args(toy, out), out, lambda: any(out.glob("*/panorama.json")), sig,
-                        seed=int(sig) + 100)
+                        seed=int(sig) + 100, max_delay=0.3)
     assert manifest_scenes(out) == manifest_scenes(bench_straight)
-    assert len(set(manifest_scenes(out))) == 2
+    assert len(set(manifest_scenes(out))) == 6
     assert_same_exrs(exr_pixels(out, "*/*/*.exr"), exr_pixels(bench_straight, "*/*/*.exr"))
 
 
@@ -234,5 +236,5 @@ def test_bench_run_interrupted_then_rerun_runs_every_case_once_and_identically(b
     out = tmp_path / "results"
     interrupt_and_rerun(["bench", "run", bench_straight, "--out", out, *RUN], out,
                         lambda: any(out.glob("cases/*/*/*/result.json")), sig, seed=int(sig) + 200)
-    assert len(run_straight) == 2
+    assert len(run_straight) == 6
     assert results(out) == run_straight
