@@ -85,7 +85,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--busy", type=int, default=1, help="busy processes for the 'under load' row")
     args = ap.parse_args()
-    load = os.getloadavg()[0]
+    load_before = os.getloadavg()[0]
 
     rows = []
     for load in ("as found", "under load"):
@@ -107,7 +107,7 @@ def main() -> None:
         rows.append((load, before, passive, after))
 
     print(f"Latent fit of the bundled prior, {args.steps} steps; median of {args.repeats}; "
-          f"{os.cpu_count()} CPUs, load average before the run {load:.2f}\n")
+          f"{os.cpu_count()} CPUs, load average before the run {load_before:.2f}\n")
     print("| machine | before: torch defaults | passive waiting only | after: roomlight's policy | speed-up |")
     print("|---|---:|---:|---:|---:|")
     for load, *cols in rows:
