@@ -122,17 +122,25 @@ def train_step_fn(model, batch: int, device: str, amp: bool, channels_last: bool
     gen = torch.Generator(device=device).manual_seed(0)
     model.train()
 
+    # The phases are labelled for torch.profiler (benchmarks/profile_train_step.py); outside a
+    # profiler a label costs microseconds against a step of tens of milliseconds or more.
+    phase = torch.profiler.record_function
+
     def step():
-        r, d = augment_batch(rad, dep, aug)
-        x = model.normalization.normalize(r, d)
-        with torch.autocast(device_type=device, dtype=torch.bfloat16, enabled=amp):
+        with phase("phase: augmentation"):
+            r, d = augment_batch(rad, dep, aug)
+            x = model.normalization.normalize(r, d)
+        with phase("phase: forward"), torch.autocast(device_type=device, dtype=torch.bfloat16, enabled=amp):
             x_hat, post = model(x, True, gen)
-        loss = vae_loss(x_hat.float(), x, post.mean.float(), post.logvar.float(), 500, model.normalization,
-                        target_radiance=r)["total"]
-        opt.zero_grad(set_to_none=True)
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(model.parameters(), 10.0)
-        opt.step()
+        with phase("phase: loss"):
+            loss = vae_loss(x_hat.float(), x, post.mean.float(), post.logvar.float(), 500, model.normalization,
+                            target_radiance=r)["total"]
+        with phase("phase: backward"):
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+        with phase("phase: optimiser"):
+            torch.nn.utils.clip_grad_norm_(model.parameters(), 10.0)
+            opt.step()
 
     return step
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_model import fake_batch, make_model  # noqa: E402
+from bench_model import make_model, train_step_fn  # noqa: E402
 
 #: Operator families, matched in order against the profiler's op names (first match wins).
 FAMILIES = (
@@ -41,35 +41,6 @@ def family(name: str) -> str:
         if any(k in n for k in keys):
             return fam
     return "other"
-
-
-def step_fn(model, batch: int, cfg_loss=None):
-    from roomlight.data import augment_batch
-    from roomlight.losses import vae_loss
-
-    opt = torch.optim.AdamW(model.parameters(), lr=2e-4, betas=(0.9, 0.99), weight_decay=0.01)
-    rad, dep = fake_batch(model, batch, "cpu")
-    aug = torch.Generator().manual_seed(0)
-    gen = torch.Generator().manual_seed(0)
-    model.train()
-    rf = torch.profiler.record_function
-
-    def step():
-        with rf("phase: augmentation"):
-            r, d = augment_batch(rad, dep, aug, tilt_deg=7.0)
-            x = model.normalization.normalize(r, d)
-        with rf("phase: forward"):
-            x_hat, post = model(x, True, gen)
-        with rf("phase: loss"):
-            loss = vae_loss(x_hat, x, post.mean, post.logvar, 500, model.normalization, target_radiance=r)["total"]
-        with rf("phase: backward"):
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-        with rf("phase: optimiser"):
-            torch.nn.utils.clip_grad_norm_(model.parameters(), 10.0)
-            opt.step()
-
-    return step
 
 
 def loader_seconds(data: str, preset: str, batch: int, batches: int = 8) -> float | None:
@@ -108,7 +79,7 @@ def main() -> None:
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     model = make_model(args.preset, "cpu")
-    step = step_fn(model, args.batch)
+    step = train_step_fn(model, args.batch, "cpu", amp=False)
     step()
     step()
     with torch.profiler.profile(activities=[torch.profiler.ProfilerActivity.CPU]) as prof:
