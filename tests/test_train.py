@@ -263,3 +263,30 @@ def test_train_cli_runs_resumes_and_refuses(toy8, tmp_path):
                               "--print-config", "--set", "aug_tilt_deg=0"])
     assert json.loads(res.output)["aug_tilt_deg"] == 0
     assert math.isfinite(json.loads((tmp_path / "r" / "best" / "best.json").read_text())["total"])
+
+
+def test_init_from_starts_at_the_source_weights_and_statistics(toy8, tmp_path):
+    """A run with ``init_from`` begins exactly at the source model (weights and normalisation,
+    even when its own data would give other statistics), trains from there, and a model of
+    another architecture is refused by name."""
+    source_run = run(tiny(max_steps=3), toy8, tmp_path / "source")
+    source = PanoVAE.from_pretrained(resolve_run_model(tmp_path / "source"))
+    other = tmp_path / "other-data"
+    write_toy_dataset(other, 6, 32, seed=5)  # different panoramas: different statistics
+    t = Trainer(tiny(max_steps=2, init_from=str(tmp_path / "source")), other, tmp_path / "ft", device="cpu",
+                note=lambda m: None)
+    start = params(t.model)
+    for k, v in params(source).items():
+        assert torch.equal(start[k], v), k
+    assert t.model.normalization.to_dict() == source.normalization.to_dict()
+    fresh = Trainer(tiny(max_steps=2), other, tmp_path / "fresh", device="cpu", note=lambda m: None)
+    assert fresh.model.normalization.to_dict() != source.normalization.to_dict()  # the adoption is visible
+    fresh.close()
+    t.fit()
+    t.close()
+    moved = max(float((params(t.model)[k] - v).abs().max()) for k, v in start.items() if v.is_floating_point())
+    assert moved > 0
+    assert source_run.step == 3
+    with pytest.raises(RoomlightError, match="architecture differs"):
+        Trainer(tiny(model="small", max_steps=2, init_from=str(tmp_path / "source")), other, tmp_path / "bad",
+                device="cpu", note=lambda m: None)

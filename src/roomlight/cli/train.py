@@ -32,10 +32,13 @@ from roomlight.train.config import TRAIN_PRESETS
               "follow); the same command continues later. The schedule is unchanged.")
 @click.option("--until-step", type=click.IntRange(min=1), default=None,
               help="Stop at this step (checkpointed); the same command continues later.")
+@click.option("--init-from", "init_from", default=None, metavar="MODEL",
+              help="Start from this model's weights (a model folder or a run; same --config preset) with a "
+              "fresh optimiser and schedule: fine-tuning, or a second schedule after a finished run.")
 @click.option("--print-config", is_flag=True, help="Print the resolved configuration as JSON and exit.")
 @repair_options
 def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, num_workers, no_cache, device,
-            sets, time_budget, until_step, print_config, clamp_negative, fill_nonfinite):
+            sets, time_budget, until_step, init_from, print_config, clamp_negative, fill_nonfinite):
     """Train the illumination prior on panoramas in --data, writing the run to --out.
 
     Interrupting (Ctrl-C or SIGTERM) finishes the current step and saves a checkpoint; running the
@@ -49,6 +52,8 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
 
     overrides = {k: v for k, v in dict(batch_size=batch_size, epochs=epochs, max_steps=max_steps, lr=lr, seed=seed,
                                        num_workers=num_workers).items() if v is not None}
+    if init_from is not None:
+        overrides["init_from"] = init_from
     if no_cache:
         overrides["cache"] = False
     if clamp_negative:

@@ -91,6 +91,11 @@ class TrainConfig(StrictConfig):
     image_every: int = 1000
     #: Show a tqdm progress bar.
     progress: bool = True
+    #: Start from the weights of this model (a model folder or a training run) instead of a random
+    #: initialisation: fine-tuning, or a second schedule after a finished one. The architecture
+    #: must match :attr:`model`, and the run adopts that model's normalisation statistics (the
+    #: weights mean nothing under other ones). The optimiser and schedule start afresh.
+    init_from: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))

@@ -158,6 +158,10 @@ class Trainer:
     def _setup_model(self) -> None:
         cfg = self.cfg
         norm_path = self.run_dir / "normalization.json"
+        source = self._init_source() if cfg.init_from else None
+        if source is not None and not norm_path.exists() and self.dist.is_main:
+            self.note(f"starting from the weights of {cfg.init_from}, with its normalisation statistics")
+            ck.atomic_write_text(norm_path, json.dumps(source.normalization.to_dict(), indent=2) + "\n")
         if not norm_path.exists() and self.dist.is_main:
             self.note(f"computing normalisation statistics over {len(self.train_set)} training panoramas")
             from roomlight.data.stats import NoUsablePanorama
@@ -175,6 +179,8 @@ class Trainer:
         norm = Normalization.from_dict(json.loads(norm_path.read_text()))
         torch.manual_seed(cfg.seed)  # identical initial weights on every rank and every fresh run
         self.model = PanoVAE(cfg.model_config, norm, {"depth_units": cfg.depth_units, "source": "roomlight train"})
+        if source is not None:  # a resumed run overwrites these with its checkpoint's weights
+            self.model.load_state_dict(source.state_dict())
         self.model.to(self.device)
         cuda = self.device.type == "cuda"
         self.amp = cfg.amp == "bf16" or (cfg.amp == "auto" and cuda)
@@ -192,6 +198,19 @@ class Trainer:
         rank = self.dist.rank
         self.aug_gen = torch.Generator().manual_seed(cfg.seed * 7919 + 101 + rank)
         self.sample_gen = torch.Generator(device=self.device).manual_seed(cfg.seed * 7919 + 202 + rank)
+
+    def _init_source(self) -> PanoVAE:
+        """The model named by ``init_from``, checked against this run's architecture."""
+        from roomlight.model.runs import load_run_model
+
+        source = load_run_model(self.cfg.init_from, device="cpu")
+        if source.config != self.cfg.model_config:
+            raise RoomlightError(
+                f"init_from {self.cfg.init_from}: its architecture differs from the {self.cfg.model!r} preset "
+                f"this run trains; pass the preset it was trained with (--config)")
+        if source.normalization is None:
+            raise RoomlightError(f"init_from {self.cfg.init_from}: the model has no normalisation statistics")
+        return source
 
     # ------------------------------------------------------------------ state
     def _rng_state(self) -> dict[str, torch.Tensor]:
