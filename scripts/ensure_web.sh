@@ -20,21 +20,7 @@ if [ "$have" != "$THREE_VERSION" ]; then
   fi
 fi
 if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1; then
-  if command -v apt-get >/dev/null 2>&1; then
-    SUDO=""
-    if [ "$(id -u)" != "0" ]; then
-      if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then SUDO="sudo -n"; else
-        echo "roomlight: the browser tests need Chromium; run 'apt-get install chromium' as root" >&2
-        exit 0
-      fi
-    fi
-    echo "roomlight: installing chromium for the browser tests"
-    export DEBIAN_FRONTEND=noninteractive
-    $SUDO apt-get install -y -q chromium >/dev/null 2>&1 || {
-      $SUDO apt-get update -q >/dev/null && $SUDO apt-get install -y -q chromium >/dev/null
-    } || echo "roomlight: could not install chromium; the browser tests will be skipped" >&2
-  else
-    echo "roomlight: no apt-get; install Chromium for the browser tests" >&2
-  fi
+  . "$here/scripts/apt_install.sh"
+  apt_install chromium "the browser tests; without it they are skipped" || true
 fi
 exit 0
