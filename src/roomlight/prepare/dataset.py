@@ -361,7 +361,9 @@ def prepare_folder(inp, out, cfg: PrepareConfig, progress: bool = True) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     shutil.rmtree(out / PARTIAL_DIR, ignore_errors=True)  # leftovers of an interrupted run
     settings = _settings(cfg)
-    _check_resume(out, settings, len(todo) < len(jobs))
+    # any earlier output counts: with another split or size the new targets would not even collide
+    earlier = any(PARTIAL_DIR not in p.relative_to(out).parts for p in out.rglob("*.exr"))
+    _check_resume(out, settings, earlier)
     tmp = out / (SETTINGS_NAME + ".tmp")
     tmp.write_text(json.dumps(settings, indent=2))
     os.replace(tmp, out / SETTINGS_NAME)

@@ -125,6 +125,16 @@ class SyntheticEstimator:
         i = np.clip(np.floor(v.numpy() * h).astype(np.int64), 0, h - 1)
         return self.truth[i, j]
 
+    def distortion(self, index: int) -> tuple[float, float]:
+        """View ``index``'s scale s and shift factor f: the prediction is (z' - f min z') / s
+        (metric: s = exp(-e), f = 0; scale: f = 0)."""
+        rng = np.random.default_rng([int(self.seed) & 0x7FFFFFFF, int(index), 1])
+        if self.kind == "metric":
+            return math.exp(-rng.uniform(-self.metric_jitter, self.metric_jitter)), 0.0
+        lo, hi = self.scale_range
+        s = math.exp(rng.uniform(math.log(lo), math.log(hi)))
+        return s, (rng.uniform(-self.shift, self.shift) if self.kind == "affine" else 0.0)
+
     def __call__(self, view: View) -> np.ndarray:
         rng = np.random.default_rng([int(self.seed) & 0x7FFFFFFF, int(view.index)])
         z = self.true_distance(view) * view.cos_to_axis()
@@ -135,14 +145,8 @@ class SyntheticEstimator:
             field += rng.uniform(0.5, 1.0) * np.cos(math.pi * (f[0] * x + f[1] * y) + rng.uniform(0, 2 * math.pi))
         field *= self.bias / max(np.abs(field).max(), 1e-12)
         zd = z * np.exp(field + rng.normal(0.0, self.noise, z.shape))
-        if self.kind == "metric":
-            return zd * math.exp(rng.uniform(-self.metric_jitter, self.metric_jitter))
-        lo, hi = self.scale_range
-        s = math.exp(rng.uniform(math.log(lo), math.log(hi)))
-        if self.kind == "scale":
-            return zd / s
-        t = rng.uniform(-self.shift, self.shift) * float(zd.min())
-        return (zd - t) / s
+        s, f = self.distortion(view.index)
+        return (zd - f * float(zd.min())) / s
 
 
 class MoGeEstimator:

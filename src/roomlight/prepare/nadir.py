@@ -45,14 +45,15 @@ def cap_rows(cap_deg: float, height: int) -> int:
     return min(height, int(math.ceil(cap_deg * height / 180.0 - 1e-6)))
 
 
-def detect_nadir_cap(radiance: np.ndarray, dark: float = 1e-3, core: float = 0.5, edge: float = 0.02) -> float:
+def detect_nadir_cap(radiance: np.ndarray, dark: float = 1e-3, core: float = 0.5) -> float:
     """Polar extent of a black blind spot at the bottom of a panorama, in degrees from the nadir (0: none).
 
     A pixel is dark when its luminance is at most ``dark`` x the panorama's median luminance.
     The cap is the run of bottom rows in which at least a fraction ``core`` of the pixels are dark
-    (the bottom row must be one of them), extended upwards by at most a quarter of its rows while
-    rows still hold a fraction ``edge`` of dark pixels (the ragged rim of a blind spot that is not
-    centred on the pole). The result is a whole number of rows: ``rows x 180 / H``.
+    (the bottom row must be one of them), extended upwards, by at most as many rows again, while
+    a row has dark pixels touching (same or neighbouring column) the dark pixels just below them:
+    the rim of a blind spot that is not centred on the pole, without the dark objects elsewhere
+    in those rows. The result is a whole number of rows: ``rows x 180 / H``.
 
     Args:
         radiance: (H, W, 3) linear radiance.
@@ -65,16 +66,21 @@ def detect_nadir_cap(radiance: np.ndarray, dark: float = 1e-3, core: float = 0.5
         med = float(pos.mean()) if pos.size else 0.0
     if med <= 0:
         return 0.0  # an all-black panorama has no blind spot to speak of
-    frac = (y <= dark * med).mean(axis=1)
+    is_dark = y <= dark * med
+    frac = is_dark.mean(axis=1)
     i = h - 1
     if frac[i] < core:
         return 0.0
     while i > 0 and frac[i - 1] >= core:
         i -= 1
-    extra, limit = 0, max(1, (h - i) // 4)
-    while i > 0 and frac[i - 1] >= edge and extra < limit:
+    front, limit = is_dark[i], h - i
+    while i > 0 and limit > 0:
+        reach = front | np.roll(front, 1) | np.roll(front, -1)  # columns wrap around
+        front = is_dark[i - 1] & reach
+        if not front.any():
+            break
         i -= 1
-        extra += 1
+        limit -= 1
     return (h - i) * 180.0 / h
 
 
