@@ -200,6 +200,10 @@ def prepare_file(job: PrepareJob, cfg: PrepareConfig, out_dir) -> dict:
     try:
         record.update(_prepare(job, cfg, Path(out_dir)))
         record["status"] = "written"
+    except InputFileError as exc:
+        # the record already names the input: keep the path only when the problem is another file's
+        same = exc.path == job.source
+        record.update(status="skipped", reason=(exc.problem + (f" ({exc.fix})" if exc.fix else "")) if same else str(exc))
     except RoomlightError as exc:
         record.update(status="skipped", reason=str(exc))
     except Exception as exc:  # noqa: BLE001 - one broken input must not stop the folder

@@ -115,7 +115,7 @@ class LamaInpainter:
         h, w = mask.shape
         rgb = (np.clip(image, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
         hole = np.asarray(mask, bool).astype(np.uint8) * 255
-        out = self._model(Image.fromarray(rgb), Image.fromarray(hole, mode="L"))
+        out = self._model(Image.fromarray(rgb), Image.fromarray(hole))
         # the model pads to a multiple of 8; keep the original frame
         return np.asarray(out, np.float32)[:h, :w, :3] / 255.0
 
