@@ -23,7 +23,7 @@ $(STAMP): pyproject.toml scripts/ensure_llvm.sh
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@$(PY) -m pip install -q --upgrade pip
 	@$(PY) -c "import torch" 2>/dev/null || $(PY) -m pip install -q "$(TORCH_SPEC)"
-	@$(PY) -m pip install -q -e ".[test,denoise,export,dask]"
+	@$(PY) -m pip install -q -e ".[test,denoise,export,dask,prepare]"
 	@touch $(STAMP)
 
 info: $(STAMP)

@@ -22,7 +22,7 @@ LAYERS = [
     ["train", "parallax"],
     ["viewer"],
     ["export"],
-    ["eval", "bench", "synth"],
+    ["eval", "bench", "synth", "prepare"],
     ["inverse", "data"],
     ["scene", "fit", "losses", "model", "examples"],
     ["render"],

@@ -29,6 +29,7 @@ def cli(threads):
       roomlight emitter PANO --out DIR     panorama -> emitter (PLY, EXR, Mitsuba XML)
       roomlight render DIR --out DIR       render a view of an emitter scene
       roomlight synth --n N --out DIR       render a dataset of procedural rooms
+      roomlight prepare IN --out DIR       real captures -> training data (nadir, depth)
       roomlight train --data DIR --out RUN     train the prior on panoramas
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
@@ -40,11 +41,11 @@ def cli(threads):
 
 
 def _register():
-    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, export, fit, fit_pano, info, render,
-                               sample, synth, train, view)
+    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, export, fit, fit_pano, info, prepare,
+                               render, sample, synth, train, view)
 
-    for mod in (info, emitter, render, synth, data, train, fit_pano, eval_prior, sample, convert, fit, bench, demo,
-                view, export):
+    for mod in (info, emitter, render, synth, prepare, data, train, fit_pano, eval_prior, sample, convert, fit, bench,
+                demo, view, export):
         cli.add_command(mod.command)
 
 

@@ -35,8 +35,9 @@ def _shard(text: str) -> tuple[int, int]:
 @click.option("--workers", type=int, default=1, show_default=True, help="Worker processes.")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Render on the workers of this Dask scheduler (tcp://host:8786) instead; needs roomlight[dask].")
-@click.option("--nadir-cap", type=float, default=0.0, show_default=True,
-              help="Simulate a tripod blind spot: black cap of this polar angle (degrees) at the nadir.")
+@click.option("--nadir-cap", type=click.FloatRange(min=0.0, max=90.0, max_open=True), default=0.0, show_default=True,
+              help="Simulate a tripod blind spot: black cap of this polar angle (degrees) at the nadir "
+                   "(`roomlight prepare` inpaints it).")
 @click.option("--denoise/--no-denoise", default=None,
               help="Denoise with Intel OIDN (pyoidn, installed by `make setup`); light sources keep their exact "
                    "values. Default: on when pyoidn can be imported. 64 spp denoised matches 256 spp "

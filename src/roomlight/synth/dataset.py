@@ -249,12 +249,14 @@ def _files(out: Path) -> list[Path]:
     return sorted(p for p in Path(out).glob("*/room-*.exr") if ".partial" not in p.name)
 
 
-def write_stats(out) -> dict:
-    """``stats.json`` over every sample in ``out``: luminance percentiles, dynamic range, depth range."""
+def write_stats(out, files=None) -> dict:
+    """``stats.json`` over every sample in ``out``: luminance percentiles, dynamic range, depth range.
+
+    ``files`` lists the samples (default: ``out/*/room-*.exr``); a sample's split is its folder's name."""
     from roomlight.io import read_panorama
 
     lums, depths, dr_stops, factors, counts = [], [], [], [], {}
-    for p in _files(out):
+    for p in (_files(out) if files is None else [Path(f) for f in files]):
         pano = read_panorama(p)
         y = luminance_np(pano.radiance)
         lums.append(np.random.default_rng(0).choice(y.ravel(), size=min(4096, y.size), replace=False))
@@ -281,16 +283,17 @@ def write_stats(out) -> dict:
     return stats
 
 
-def contact_sheet(out, count: int = 24, columns: int = 4) -> Path:
+def contact_sheet(out, count: int = 24, columns: int = 4, files=None) -> Path:
     """``contact_sheet.png``: tone-mapped radiance of the first ``count`` samples.
 
     Samples are calibrated to unit log-average luminance; the sheet maps that average to
     photographic middle grey (0.18, i.e. -2.47 stops) before clipping and gamma 2.2, as a camera's
-    auto-exposure would, so walls are not washed out and only light sources saturate."""
+    auto-exposure would, so walls are not washed out and only light sources saturate. ``files``
+    lists the samples (default: ``out/*/room-*.exr``)."""
     from roomlight.io import read_panorama, save_png
     from roomlight.io.preview import tonemap_gamma
 
-    files = _files(out)[:count]
+    files = (_files(out) if files is None else [Path(f) for f in files])[:count]
     if not files:
         raise RoomlightError(f"{out}: no samples for a contact sheet")
     tiles = [tonemap_gamma(read_panorama(p).radiance, exposure_stops=math.log2(MIDDLE_GREY)) for p in files]
