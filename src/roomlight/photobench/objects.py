@@ -185,15 +185,20 @@ class ProbeSphere:
     radius: float
 
     def mitsuba_shape(self, material: str, world_to_frame: np.ndarray | None = None):
-        """A Mitsuba analytic sphere with the named probe material (:data:`PROBE_MATERIALS`)."""
+        """A Mitsuba analytic sphere with the named probe material (:data:`PROBE_MATERIALS`).
+
+        ``world_to_frame``: a (4, 4) similarity (rotation, uniform scale, translation); the
+        radius scales with it."""
         from roomlight.render.materials import material as probe_bsdf
         from roomlight.render.variant import mitsuba
 
         mi = mitsuba()
         c = np.asarray(self.center, np.float64)
+        r = float(self.radius)
         if world_to_frame is not None:
             c = transform_points(world_to_frame, c)[0]
-        return mi.load_dict({"type": "sphere", "center": [float(x) for x in c], "radius": float(self.radius),
+            r *= float(np.cbrt(np.linalg.det(np.asarray(world_to_frame, np.float64)[:3, :3])))
+        return mi.load_dict({"type": "sphere", "center": [float(x) for x in c], "radius": r,
                              "bsdf": probe_bsdf(material)})
 
     def to_dict(self) -> dict:

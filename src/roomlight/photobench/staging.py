@@ -24,8 +24,11 @@ holds for any room the generator makes:
    98 % of its coverage alone), inside the frame and show ``min_pixels`` whole pixels. A failed
    check restarts from step 2 with another target; a room that fails too often is replaced.
 
-The **oracle centre** (where the oracle light is captured) is the probes' centroid when it is in
-free space, else the probe centre nearest to it.
+The **oracle centre** (where the oracle light is captured) is the first of the probes' centroid,
+then points 0.2, 0.4, ... 1 m above it, then the same above each probe centre, that lies in free
+space (no surface within 5 cm) and sees every probe whole (a ray towards each probe centre meets
+nothing before the probe's far side), so every probe lies inside the captured 2.5D light. When
+none sees them all, the one that sees the most.
 """
 
 from __future__ import annotations
@@ -51,6 +54,8 @@ _UP = np.array([0.0, 1.0, 0.0])
 _GAP = 0.002            # objects and probes hover this far above their support (no coincident faces)
 _CLEAR = 0.02           # free margin around a footprint
 _SPACING = 0.03         # gap between footprints
+#: Heights (m) above the probes' centroid (then above each probe) tried for the oracle centre.
+_ORACLE_LIFTS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 
 
 class StagingError(RoomlightError):
@@ -265,15 +270,28 @@ def _check_probes(scene_all, probe_shapes, camera: PhotoCamera, config: PhotoBen
 
 
 def _oracle_center(caster: RayCaster, probes: list[ProbeSphere]) -> np.ndarray:
+    """The oracle light's capture point (see the module docstring)."""
     centres = np.array([p.center for p in probes])
+    radii = np.array([p.radius for p in probes])
     mean = centres.mean(0)
-    near, back = _clearance(caster, mean)
-    # the centroid must lie in free space: no surface within 2 cm, and no inside of a solid
-    # (rays from inside a closed solid meet its faces from behind)
-    if near > 0.02 and back == 0 and all(
-            np.linalg.norm(mean - c) > p.radius + 0.01 for c, p in zip(centres, probes)):
-        return mean
-    return centres[int(np.argmin(np.linalg.norm(centres - mean, axis=1)))]
+    candidates = [mean + [0.0, h, 0.0] for h in _ORACLE_LIFTS] + [c + [0.0, h, 0.0] for h in _ORACLE_LIFTS
+                                                                  for c in centres]
+    best, best_seen = centres[int(np.argmin(np.linalg.norm(centres - mean, axis=1)))], -1
+    for c in candidates:
+        near, back = _clearance(caster, c)
+        # free space: no surface within 5 cm, and not inside a solid (rays from inside a closed
+        # solid meet its faces from behind); the probes' own spheres are not in this scene
+        if near < 0.05 or back:
+            continue
+        to = centres - c
+        dist = np.linalg.norm(to, axis=1)
+        t, _, _ = caster.cast(c[None], to / np.maximum(dist, 1e-9)[:, None])
+        seen = int(np.sum(t > dist + radii))
+        if seen == len(probes):
+            return c
+        if seen > best_seen:
+            best, best_seen = c, seen
+    return best
 
 
 def stage_photo(room, rng: np.random.Generator, config: PhotoBenchConfig, room_scene=None) -> Staging:

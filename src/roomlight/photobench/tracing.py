@@ -41,12 +41,17 @@ def _rows_per_pass(camera: PhotoCamera, rays_per_pixel: int) -> int:
     return max(1, min(camera.height, MAX_RAYS_PER_PASS // (camera.width * rays_per_pixel)))
 
 
-def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sampler: str = "multijitter") -> np.ndarray:
+def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sampler: str = "multijitter",
+                foreground=None) -> np.ndarray:
     """Path-traced image of ``scene`` (which holds its integrator) seen by ``camera``.
 
     Args:
         scene: ``mi.Scene`` with an integrator; spp: samples per pixel (stratified samplers round
             it up, see :func:`roomlight.synth.camera.effective_spp`); seed: any int.
+        foreground: an optional ``mi.Scene`` of some of ``scene``'s shapes. A camera ray that hits
+            one of them starts just in front of that hit instead of at the camera, so nothing else
+            of ``scene`` can hide it (a light source's mesh that does not enclose the camera, say);
+            other rays start at the camera.
     Returns:
         (H, W, 3) float32 linear radiance, in the scene's emitter units.
     """
@@ -74,6 +79,11 @@ def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sample
         j = pix % w
         s = smp.next_2d()
         ray = camera_rays(mi, dr, camera, mi.Float(j) + s.x, mi.Float(i) + s.y)
+        if foreground is not None:
+            hit = foreground.ray_intersect(ray)
+            # back off by a relative 1e-4 so that the moved ray still meets the surface it found
+            t0 = dr.select(hit.is_valid(), dr.maximum(hit.t * (1.0 - 1e-4) - 1e-6, 0.0), 0.0)
+            ray = mi.Ray3f(ray.o + t0 * ray.d, ray.d)
         L, _, _ = integrator.sample(scene, smp, ray)
         L = mi.Color3f(L)
         dr.eval(L)
