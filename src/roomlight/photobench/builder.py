@@ -77,19 +77,17 @@ def _depth_for_methods(true_depth: np.ndarray, config: PhotoBenchConfig, index: 
 
 
 def _stage(config: PhotoBenchConfig, index: int):
+    from roomlight.photobench.roomscene import RoomScenes
     from roomlight.synth.rooms import generate_room
-    from roomlight.synth.scene import build_scene
 
     rng = np.random.default_rng([config.seed, index, _SALT_ROOM])
     problems = []
     for _ in range(ROOMS_PER_PHOTO):
         room_seed = int(rng.integers(0, 2**31 - 1))
-        room = generate_room(room_seed)
-        scene = build_scene(room, max_depth=config.max_depth)
+        scenes = RoomScenes(generate_room(room_seed), config.max_depth)
         try:
-            staging = stage_photo(room, np.random.default_rng([config.seed, index, room_seed, _SALT_STAGE]), config,
-                                  scene)
-            return room, scene, staging
+            staging = stage_photo(scenes, np.random.default_rng([config.seed, index, room_seed, _SALT_STAGE]), config)
+            return scenes, staging
         except StagingError as exc:
             problems.append(str(exc))
     raise PhotoBuildError(f"{photo_name(index)}: no room of {ROOMS_PER_PHOTO} could be staged ({problems[-1]})")
@@ -111,17 +109,17 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
     from roomlight.io import write_panorama
     from roomlight.photobench.tracing import trace_coverage, trace_depth, trace_image
     from roomlight.synth.camera import render_depth, render_radiance
-    from roomlight.synth.scene import build_scene
     from roomlight.synth.spec import GENERATOR_VERSION
 
     t0 = time.perf_counter()
     out = Path(out_dir)
     name = photo_name(index)
-    room, room_scene, st = _stage(config, index)
+    scenes, st = _stage(config, index)
+    room, room_scene = scenes.room, scenes.base
     seeds = photo_seeds(config, index)
     cam = st.camera
     meshes = {o.id: o.mitsuba_mesh() for o in st.objects}
-    photo_scene = build_scene(room, max_depth=config.max_depth, extra=meshes)
+    photo_scene = scenes.scene(meshes)
     image = trace_image(photo_scene, cam, config.spp, seeds["photo"])
     depth = trace_depth(photo_scene, cam)
     if not np.isfinite(depth).all() or (depth <= 0).any():
@@ -134,7 +132,7 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
     probe_renders, probe_labels = {}, None
     for m in PROBE_MATERIALS:
         shapes = {p.id: p.mitsuba_shape(m) for p in st.probes}
-        scene = build_scene(room, max_depth=config.max_depth, extra={**meshes, **shapes})
+        scene = scenes.scene({**meshes, **shapes})
         if probe_labels is None:
             probe_labels = _labels(trace_coverage(scene, cam, list(shapes.values()), config.supersample))
         probe_renders[m] = trace_image(scene, cam, config.spp, seeds[f"probes_{m}"]) * k

@@ -294,16 +294,14 @@ def _oracle_center(caster: RayCaster, probes: list[ProbeSphere]) -> np.ndarray:
     return best
 
 
-def stage_photo(room, rng: np.random.Generator, config: PhotoBenchConfig, room_scene=None) -> Staging:
-    """Stage one photograph in ``room`` (see the module docstring); raises :class:`StagingError`.
+def stage_photo(scenes, rng: np.random.Generator, config: PhotoBenchConfig) -> Staging:
+    """Stage one photograph in a room (see the module docstring); raises :class:`StagingError`.
 
     Args:
-        room: a :class:`~roomlight.synth.spec.Room`; room_scene: its Mitsuba scene (built when None).
+        scenes: the room's :class:`~roomlight.photobench.roomscene.RoomScenes`.
     """
-    from roomlight.synth.scene import build_scene
-
-    room_scene = room_scene if room_scene is not None else build_scene(room)
-    caster = RayCaster(room_scene)
+    room = scenes.room
+    caster = RayCaster(scenes.base)
     eye = eye_position(room, caster, rng, config.eye_height)
     last = "no attempt"
     for attempt in range(1, TRIES_PER_ROOM + 1):
@@ -316,11 +314,11 @@ def stage_photo(room, rng: np.random.Generator, config: PhotoBenchConfig, room_s
             objects = _place_objects(caster, camera, supports, target, rng, config)
             probes = _place_probes(caster, camera, supports, objects, rng, config)
             meshes = [o.mitsuba_mesh() for o in objects]
-            scene_obj = build_scene(room, extra={o.id: m for o, m in zip(objects, meshes)})
+            scene_obj = scenes.scene({o.id: m for o, m in zip(objects, meshes)})
             _check_objects(scene_obj, meshes, camera, config)
             shapes = [p.mitsuba_shape("diffuse") for p in probes]
-            scene_all = build_scene(room, extra={**{o.id: m for o, m in zip(objects, meshes)},
-                                                 **{p.id: s for p, s in zip(probes, shapes)}})
+            scene_all = scenes.scene({**{o.id: m for o, m in zip(objects, meshes)},
+                                      **{p.id: s for p, s in zip(probes, shapes)}})
             _check_probes(scene_all, shapes, camera, config)
             centre = _oracle_center(RayCaster(scene_obj), probes)
             return Staging(camera, target, objects, probes, centre, attempt)
