@@ -13,7 +13,10 @@ Photo ``i`` (``OUT/photo-0000i/``, the case format of :mod:`roomlight.photobench
 4. exact z-depth at pixel centres (ray casting the photo's scene), and ``mask.png``: label k
    where a pixel is wholly covered by object k (``supersample``^2 rays), 0 elsewhere;
 5. the **truth**: the same scene with all probes added, one render per probe material (diffuse,
-   matte, mirror), same camera and settings, other seeds; the probes' mask; and the **oracle
+   matte, mirror), same camera, of the window around the probes (their pixels' bounding box
+   grown by 2 px) at ``probe_spp``: the mean of two independent halves, whose difference
+   (``noise_floor``: the metrics between the halves) tells how noisy the truth is; the probes'
+   mask (the whole frame); and the **oracle
    light**: the room without objects or probes captured as a radiance + radial depth panorama at
    the oracle centre (the representation's ceiling: what a perfect method could recover);
 6. ``depth.exr`` for the methods: the exact depth, or a degraded copy (``depth_noise``,
@@ -44,6 +47,7 @@ from roomlight.photobench.objects import PROBE_MATERIALS
 from roomlight.photobench.staging import StagingError, stage_photo
 
 __all__ = ["MANIFEST", "MANIFEST_VERSION", "ROOMS_PER_PHOTO", "photo_name", "build_photo", "update_depth",
+           "render_probe_truth", "probe_window",
            "make_photo_benchmark", "read_photo_manifest", "photo_seeds", "PhotoBuildError"]
 
 MANIFEST = "manifest.json"
@@ -63,7 +67,7 @@ def photo_name(index: int) -> str:
 
 def photo_seeds(config: PhotoBenchConfig, index: int) -> dict:
     """The render seeds of a photo: the photo, one per probe material, the oracle."""
-    base = int(np.random.default_rng([config.seed, index, _SALT_RENDER]).integers(0, 2**30))
+    base = int(np.random.default_rng([config.seed, index, _SALT_RENDER]).integers(0, 2**29))
     seeds = {"photo": base}
     for k, m in enumerate(PROBE_MATERIALS):
         seeds[f"probes_{m}"] = base + 1 + k
@@ -93,6 +97,35 @@ def _stage(config: PhotoBenchConfig, index: int):
     raise PhotoBuildError(f"{photo_name(index)}: no room of {ROOMS_PER_PHOTO} could be staged ({problems[-1]})")
 
 
+def _halves(spp: int) -> tuple[int, int]:
+    return spp - spp // 2, spp // 2
+
+
+def render_probe_truth(scene, camera, spp: int, seed: int, window, exposure: float):
+    """The truth of one probe material: ``(image, (half A, half B))``, each (h, w, 3) float32 of the
+    window, times ``exposure``. The halves take ceil(spp / 2) and floor(spp / 2) samples with
+    independent seeds; the image is their sample-weighted mean, and their difference measures
+    its noise."""
+    from roomlight.photobench.tracing import trace_image
+
+    counts = _halves(spp)
+    halves = [trace_image(scene, camera, n, seed + (1 << 24) * h, window=window) * exposure
+              for h, n in enumerate(counts)]
+    image = (counts[0] * halves[0].astype(np.float64) + counts[1] * halves[1].astype(np.float64)) / spp
+    return image.astype(np.float32), tuple(x.astype(np.float32) for x in halves)
+
+
+def probe_window(labels: np.ndarray, pad: int = 2) -> tuple[int, int, int, int]:
+    """``(x0, y0, w, h)``: the bounding box of the non-zero ``labels`` grown by ``pad`` pixels (in the frame)."""
+    ys, xs = np.nonzero(labels)
+    if ys.size == 0:
+        raise PhotoBuildError("the probes cover no whole pixel")
+    h, w = labels.shape
+    x0, y0 = max(0, int(xs.min()) - pad), max(0, int(ys.min()) - pad)
+    x1, y1 = min(w, int(xs.max()) + pad + 1), min(h, int(ys.max()) + pad + 1)
+    return x0, y0, x1 - x0, y1 - y0
+
+
 def _labels(coverage: np.ndarray) -> np.ndarray:
     """(K, H, W) coverage -> (H, W) uint8 labels: k + 1 where shape k covers the whole pixel."""
     whole = coverage >= 1.0 - 1e-6
@@ -104,6 +137,7 @@ def _labels(coverage: np.ndarray) -> np.ndarray:
 
 def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
     """Build photo ``index`` into ``out_dir/photo-<index>`` (see the module docstring); returns its record."""
+    from roomlight.bench.metrics import score_view
     from roomlight.bench.recording import record_ldr, saturated_fraction
     from roomlight.color import log_average_np
     from roomlight.io import write_panorama
@@ -129,13 +163,18 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
     if not np.isfinite(k) or k <= 0:
         raise PhotoBuildError(f"{name}: cannot expose the photo (log-average luminance gives k = {k})")
 
-    probe_renders, probe_labels = {}, None
+    shapes = {m: {p.id: p.mitsuba_shape(m) for p in st.probes} for m in PROBE_MATERIALS}
+    probe_scenes = {m: scenes.scene({**meshes, **shapes[m]}) for m in PROBE_MATERIALS}
+    first = PROBE_MATERIALS[0]
+    probe_labels = _labels(trace_coverage(probe_scenes[first], cam, list(shapes[first].values()), config.supersample))
+    window = probe_window(probe_labels)
+    x0, y0, ww, wh = window
+    in_window = probe_labels[y0:y0 + wh, x0:x0 + ww] > 0
+    probe_renders, noise_floor = {}, {}
     for m in PROBE_MATERIALS:
-        shapes = {p.id: p.mitsuba_shape(m) for p in st.probes}
-        scene = scenes.scene({**meshes, **shapes})
-        if probe_labels is None:
-            probe_labels = _labels(trace_coverage(scene, cam, list(shapes.values()), config.supersample))
-        probe_renders[m] = trace_image(scene, cam, config.spp, seeds[f"probes_{m}"]) * k
+        probe_renders[m], halves = render_probe_truth(probe_scenes[m], cam, config.probe_spp, seeds[f"probes_{m}"],
+                                                      window, k)
+        noise_floor[m] = score_view(halves[0], halves[1], in_window)
     oracle_rad = render_radiance(room_scene, st.oracle_center, height=config.oracle_height, spp=config.oracle_spp,
                                  seed=seeds["oracle"]) * k
     oracle_depth = render_depth(room_scene, st.oracle_center, height=config.oracle_height)
@@ -168,7 +207,8 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
               for p in st.probes]
     fmt.write_json(tmp / fmt.PROBES, {"probes": probes, "materials": list(PROBE_MATERIALS),
                                       "images": {m: fmt.probe_image_name(m) for m in PROBE_MATERIALS},
-                                      "mask": fmt.PROBE_MASK})
+                                      "window": list(window), "spp": config.probe_spp, "mask": fmt.PROBE_MASK,
+                                      "noise_floor": noise_floor})
     record = {
         "name": name, "index": index, "room_seed": int(room.seed), "generator": GENERATOR_VERSION,
         "room": {"type": room.room_type, "lighting": room.lighting, "shell": room.shell,
@@ -177,7 +217,8 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
         "objects": [o.to_dict() for o in st.objects], "probes": probes,
         "oracle": {"center": [float(c) for c in st.oracle_center], "height": config.oracle_height,
                    "spp": config.oracle_spp},
-        "exposure": float(k), "key": config.key, "seeds": seeds,
+        "exposure": float(k), "key": config.key, "seeds": seeds, "probe_window": list(window),
+        "noise_floor": noise_floor,
         "pixels": {"objects": {str(o.label): int((labels == o.label).sum()) for o in st.objects},
                    "probes": {str(p.label): int((probe_labels == p.label).sum()) for p in st.probes}},
         "saturated_fraction": saturated_fraction(record_ldr(photo), labels > 0),

@@ -14,10 +14,11 @@ plus the ground truth, which no method reads::
     truth/photo.json           the record: room, camera, objects, probes, exposure, settings (written last)
     truth/camera.json          the camera's pose: intrinsics and ``camera_to_world`` (4 x 4, row-major)
     truth/materials.json       the objects' true materials and geometry, by label
-    truth/probes.json          probe centres (world and camera frames), radii, labels, materials
+    truth/probes.json          probe centres (world and camera frames), radii, labels, materials, the
+                               probe window (x0, y0, w, h) and the truth's noise floor
     truth/depth.exr            the exact z-depth (depth.exr may be degraded)
     truth/probe_mask.png       probe labels: 1..P where a pixel is wholly covered by probe p
-    truth/probes_<m>.exr/.png  the photo re-rendered with the probes in material m (float32 / 8-bit)
+    truth/probes_<m>.exr/.png  the probe window of the photo re-rendered with the probes in material m
     truth/photo.png            the photo as an 8-bit recording (a preview)
     truth/oracle.exr           the room's light captured at the oracle centre: R, G, B + Z (radial, m)
 

@@ -28,7 +28,8 @@ class PhotoBenchConfig(StrictConfig):
     width: int = 256                                     #: image width
     height: int = 192                                    #: image height
     fov: float = 60.0                                    #: horizontal field of view
-    spp: int = 256                                       #: samples per pixel of the photo and the probe renders
+    spp: int = 256                                       #: samples per pixel of the photo
+    probe_spp: int = 1024                                #: samples per pixel of the probe renders (around the probes)
     max_depth: int = 5                                   #: longest light path of the ground-truth renders
     eye_height: tuple[float, float] = (1.5, 1.7)         #: camera height range above the floor
     objects: tuple[int, int] = (2, 3)                    #: inserted objects per photo (inclusive range)
@@ -50,6 +51,7 @@ class PhotoBenchConfig(StrictConfig):
                   (self.width >= 8 and self.height >= 8, "--res: the image must be at least 8x8 pixels"),
                   (0.0 < self.fov < 150.0, "--fov must be in (0, 150) degrees"),
                   (self.spp >= 1 and self.oracle_spp >= 1, "--spp must be at least 1"),
+                  (self.probe_spp >= 2, "--probe-spp must be at least 2 (two independent halves)"),
                   (self.max_depth >= 2, "max_depth must be at least 2"),
                   (0.0 < self.eye_height[0] <= self.eye_height[1], "eye_height must be an increasing positive range"),
                   # a mask with a single non-zero value reads as a binary mask, whose connected

@@ -168,17 +168,9 @@ def _markdown(results, probes, mats, paired, paired_mat, timing, failures) -> st
     return "\n".join(md) + "\n"
 
 
-def _crop(mask: np.ndarray, pad: int = 3) -> tuple[slice, slice]:
-    ys, xs = np.nonzero(mask)
-    if ys.size == 0:
-        return slice(None), slice(None)
-    h, w = mask.shape
-    return slice(max(0, ys.min() - pad), min(h, ys.max() + pad + 1)), slice(max(0, xs.min() - pad), min(w, xs.max() + pad + 1))
-
-
 def photo_figure(photo: str, results: list[dict], path: Path) -> Path:
     """One photo's figure: the ground truth, then one row per method: the photo or the recovered
-    radiance panorama, and the probes in each material (cropped around them, gamma 2.2)."""
+    radiance panorama, and the probes in each material (the probe window, gamma 2.2)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -189,8 +181,6 @@ def photo_figure(photo: str, results: list[dict], path: Path) -> Path:
     from roomlight.photobench import case as fmt
 
     case_dir = Path(results[0]["case_dir"])
-    mask = fmt.read_labels(case_dir / fmt.PROBE_MASK)
-    ys, xs = _crop(mask > 0)
     rows = [("ground truth", to_display(fmt.read_rgb_exr(case_dir / fmt.IMAGE)),
              {m: fmt.read_rgb_exr(case_dir / fmt.probe_image_name(m)) for m in PROBE_MATERIALS}, None)]
     for r in sorted(results, key=lambda r: ordered({x["method"] for x in results}, PHOTO_METHOD_ORDER).index(r["method"])):
@@ -206,7 +196,7 @@ def photo_figure(photo: str, results: list[dict], path: Path) -> Path:
         for j, m in enumerate(PROBE_MATERIALS, start=1):
             ax = axes[i, j]
             if m in imgs:
-                ax.imshow(to_display(imgs[m])[ys, xs], interpolation="nearest")
+                ax.imshow(to_display(imgs[m]), interpolation="nearest")
             title = m if scores is None else (f"{m}: {scores[m]['psnr_ldr']:.1f} dB, {scores[m]['angular_error']:.1f}°"
                                               if m in scores else m)
             ax.set_title(title, fontsize=8)

@@ -1,9 +1,10 @@
 """Scoring a recovered light on a photo: the probes re-rendered under it against the true probes.
 
 A method returns a light (a 2.5D area light, an env map or a sphere proxy: radiance (H, W, 3),
-depth (H, W) or none, its kind) in its own frame, and where the photographed scene sits in that
-frame: ``light_from_camera``, the similarity p_light = s R p_camera + t (a fit may express the
-room in other units than the depth map's metres, hence s). Rendering is unchanged by a uniform
+depth (H, W) or none, its kind) in its own frame -- centred on the light's capture point, with
+the panorama's axes -- and where the photographed scene sits in that frame:
+``light_from_camera``, the similarity p_light = s R p_camera + t (a fit may express the room in
+other units than the depth map's metres, hence s). Rendering is unchanged by a uniform
 scale of the whole scene, so the probes are rendered in the light's frame:
 
 - the probe spheres (every probe of the photo, centres and radii from ``truth/probes.json``
@@ -24,8 +25,9 @@ centre, by the factor between the given and the true depth at the pixel its cent
 it, so it covers the same pixels. With the exact depth the factor is 1. The oracles know the true
 geometry and use factor 1.
 
-Each probe material's render is compared with ``truth/probes_<material>.exr`` over the probe
-pixels (``truth/probe_mask.png``) with the synthetic benchmark's metrics
+Only the probe window (``window`` of ``truth/probes.json``) is rendered. Each probe material's
+render is compared with ``truth/probes_<material>.exr`` over the probe pixels
+(``truth/probe_mask.png``) with the synthetic benchmark's metrics
 (:func:`roomlight.bench.metrics.score_view`: PSNR LDR, RMSE HDR, RGB angular error), overall and
 per probe. Recovered materials are compared per object with the true ones
 (:func:`material_errors`).
@@ -68,7 +70,7 @@ class RecoveredLight:
         depth: (H, W) float32 radial depth in the light's units, or None (env map, sphere proxy).
         kind: ``mesh``, ``envmap`` or ``sphere:R``.
         light_from_camera: (4, 4) similarity, camera frame (x right, y up, -z forward, metres) ->
-            light frame: p_light = s R p_camera + t.
+            light frame (origin: the panorama's centre; axes: the panorama's): p_light = s R p_camera + t.
     """
 
     radiance: np.ndarray
@@ -85,11 +87,18 @@ class PhotoTruth:
     camera: PhotoCamera
     objects: list[InsertedObject]
     probes: list[ProbeSphere]
-    probe_images: dict[str, np.ndarray]        #: material -> (H, W, 3) float32
-    probe_mask: np.ndarray                     #: (H, W) int32: probe label, 0 elsewhere
+    probe_images: dict[str, np.ndarray]        #: material -> (h, w, 3) float32, the probe window
+    probe_mask: np.ndarray                     #: (H, W) int32: probe label, 0 elsewhere (whole frame)
     exposure: float
     seeds: dict = field(default_factory=dict)
     depth_factors: dict = field(default_factory=dict)  #: object / probe id -> given / true depth at its centre
+    window: tuple = None                       #: (x0, y0, w, h) of the probe images in the frame
+
+    @property
+    def window_mask(self) -> np.ndarray:
+        """(h, w) int32 probe labels inside the probe window."""
+        x0, y0, w, h = self.window
+        return self.probe_mask[y0:y0 + h, x0:x0 + w]
 
     @property
     def materials(self) -> dict[int, PrincipledMaterial]:
@@ -110,12 +119,17 @@ def load_truth(case_dir) -> PhotoTruth:
         raise fmt.PhotoCaseError(f"{d / fmt.PROBE_MASK}: {mask.shape} does not match the camera's "
                                  f"{camera.height}x{camera.width}")
     spheres = [ProbeSphere.from_dict(p) for p in probes["probes"]]
+    window = tuple(int(v) for v in probes["window"])
+    for m, img in images.items():
+        if img.shape[:2] != (window[3], window[2]):
+            raise fmt.PhotoCaseError(f"{d / fmt.probe_image_name(m)}: {img.shape[1]}x{img.shape[0]} does not match "
+                                     f"the probe window {window[2]}x{window[3]}")
     ratio = fmt.read_depth_exr(d / fmt.DEPTH).astype(np.float64) / fmt.read_depth_exr(d / fmt.TRUE_DEPTH)
     centres = [o.translate for o in objects] + [p.center for p in spheres]
     factors = _sample_map(ratio, camera.project(np.asarray(centres))[0])
     return PhotoTruth(d, camera, objects, spheres, images, mask, float(record["exposure"]),
                       dict(record.get("seeds", {})),
-                      {x.id: float(f) for x, f in zip([*objects, *spheres], factors)})
+                      {x.id: float(f) for x, f in zip([*objects, *spheres], factors)}, window)
 
 
 def _sample_map(a: np.ndarray, xy: np.ndarray) -> np.ndarray:
@@ -171,13 +185,15 @@ def _camera_in_light(camera: PhotoCamera, light_from_world: np.ndarray) -> Photo
 
 def render_probes(truth: PhotoTruth, light: RecoveredLight, material: str, spp: int = 64, seed: int = SCORE_SEED,
                   max_depth: int = SCORE_MAX_DEPTH, given_depth: bool = True) -> np.ndarray:
-    """The photo's camera view of the probes (in ``material``) and the true objects under ``light``.
+    """The photo's camera view of the probes (in ``material``) and the true objects under ``light``,
+    in the probe window.
 
     ``given_depth``: place them through the depth the methods got (module docstring); False for
     the true geometry (the oracles).
 
     Returns:
-        (H, W, 3) float32 linear radiance (the photo's exposure, as the light's radiance is).
+        (h, w, 3) float32 linear radiance of the probe window (the photo's exposure, as the
+        light's radiance is).
     """
     import torch
 
@@ -205,7 +221,8 @@ def render_probes(truth: PhotoTruth, light: RecoveredLight, material: str, spp: 
     from roomlight.render.variant import mitsuba
 
     front = mitsuba().load_dict({"type": "scene", **shapes})
-    return trace_image(es.scene, _camera_in_light(truth.camera, light_from_world), spp, seed, foreground=front)
+    return trace_image(es.scene, _camera_in_light(truth.camera, light_from_world), spp, seed, foreground=front,
+                       window=truth.window)
 
 
 def score_light(truth: PhotoTruth, light: RecoveredLight, spp: int = 64, seed: int = SCORE_SEED,
@@ -223,9 +240,10 @@ def score_light(truth: PhotoTruth, light: RecoveredLight, spp: int = 64, seed: i
         if renders is not None:
             renders[m] = img
         gt = truth.probe_images[m]
-        scores = score_view(img, gt, truth.probe_mask > 0)
-        scores["per_probe"] = {str(p.label): score_view(img, gt, truth.probe_mask == p.label) for p in truth.probes
-                               if (truth.probe_mask == p.label).any()}
+        mask = truth.window_mask
+        scores = score_view(img, gt, mask > 0)
+        scores["per_probe"] = {str(p.label): score_view(img, gt, mask == p.label) for p in truth.probes
+                               if (mask == p.label).any()}
         out[m] = scores
     return out
 

@@ -19,7 +19,7 @@ from roomlight.errors import RoomlightError
 from roomlight.photobench.camera import PhotoCamera
 from roomlight.render.variant import mitsuba
 
-__all__ = ["MAX_RAYS_PER_PASS", "trace_image", "trace_depth", "trace_coverage", "camera_rays"]
+__all__ = ["MAX_RAYS_PER_PASS", "trace_image", "trace_depth", "trace_coverage", "camera_rays", "check_window"]
 
 #: Rays traced per pass (bounds memory: ~100 bytes of state per ray).
 MAX_RAYS_PER_PASS = 1 << 22
@@ -42,7 +42,7 @@ def _rows_per_pass(camera: PhotoCamera, rays_per_pixel: int) -> int:
 
 
 def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sampler: str = "multijitter",
-                foreground=None) -> np.ndarray:
+                foreground=None, window=None) -> np.ndarray:
     """Path-traced image of ``scene`` (which holds its integrator) seen by ``camera``.
 
     Args:
@@ -52,8 +52,10 @@ def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sample
             one of them starts just in front of that hit instead of at the camera, so nothing else
             of ``scene`` can hide it (a light source's mesh that does not enclose the camera, say);
             other rays start at the camera.
+        window: ``(x0, y0, w, h)``: render only these pixels (columns x0 .. x0 + w - 1, rows
+            y0 .. y0 + h - 1): the same pixels as in the whole frame (other samples).
     Returns:
-        (H, W, 3) float32 linear radiance, in the scene's emitter units.
+        (H, W, 3) float32 linear radiance, in the scene's emitter units; (h, w, 3) for a window.
     """
     import drjit as dr
 
@@ -64,8 +66,8 @@ def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sample
         raise RoomlightError(f"render: spp must be positive, got {spp}")
     spp = effective_spp(spp, sampler)
     integrator = scene.integrator()
-    w, h = camera.width, camera.height
-    rows = _rows_per_pass(camera, spp)
+    x0, y0, w, h = check_window(camera, window)
+    rows = max(1, min(h, MAX_RAYS_PER_PASS // (w * spp)))
     out = np.zeros((h, w, 3), np.float64)
     for k, r0 in enumerate(range(0, h, rows)):
         r1 = min(h, r0 + rows)
@@ -75,8 +77,8 @@ def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sample
         smp.seed(dr.opaque(mi.UInt32, (int(seed) * 7919 + k) & 0xFFFFFFFF), n)
         idx = dr.arange(mi.UInt32, n)
         pix = idx // spp
-        i = pix // w + dr.opaque(mi.UInt32, r0)
-        j = pix % w
+        i = pix // w + dr.opaque(mi.UInt32, r0 + y0)
+        j = pix % w + dr.opaque(mi.UInt32, x0)
         s = smp.next_2d()
         ray = camera_rays(mi, dr, camera, mi.Float(j) + s.x, mi.Float(i) + s.y)
         if foreground is not None:
@@ -90,6 +92,16 @@ def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sample
         rgb = np.stack([np.asarray(L[c], np.float32) for c in range(3)], -1)
         out[r0:r1] = rgb.reshape(r1 - r0, w, spp, 3).astype(np.float64).sum(2) / spp
     return out.astype(np.float32)
+
+
+def check_window(camera: PhotoCamera, window) -> tuple[int, int, int, int]:
+    """``(x0, y0, w, h)`` of a pixel window inside the camera's frame (the whole frame for None)."""
+    if window is None:
+        return 0, 0, camera.width, camera.height
+    x0, y0, w, h = (int(v) for v in window)
+    if not (0 <= x0 and 0 <= y0 and w > 0 and h > 0 and x0 + w <= camera.width and y0 + h <= camera.height):
+        raise RoomlightError(f"render: window {window} is not inside the {camera.width}x{camera.height} frame")
+    return x0, y0, w, h
 
 
 def trace_depth(scene, camera: PhotoCamera) -> np.ndarray:
