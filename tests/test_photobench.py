@@ -436,7 +436,7 @@ def _stand_in_fit(calls):
     env-map baseline a grey env map and albedos 0.05 brighter; anything else fails."""
     from roomlight.photobench.scoring import load_truth, oracle_light
 
-    def fit(case_dir, method, preset, out_dir, model=None, progress=False):
+    def fit(case_dir, method, preset, out_dir, model=None, progress=False, overrides=None):
         calls.append((Path(case_dir).name, method, preset))
         truth = load_truth(case_dir)
         light = oracle_light(case_dir, "mesh", truth)

@@ -85,8 +85,9 @@ def make_photos(out_dir, n, seed, res, spp, fov, probes, depth_noise, depth_scal
 @click.option("--eval-spp", type=int, default=DEFAULT_EVAL_SPP, show_default=True,
               help="Samples per pixel of the probe renders under the recovered lights.")
 @click.option("--shard", default=None, metavar="I/N", help="Run only cases I, I+N, I+2N, ... (0 <= I < N).")
+@sets_option("fit-photo setting")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, quiet):
+def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, quiet):
     """Fit every photo of BENCH with each method and score the probes under the recovered light.
 
     Each case writes OUT/cases/<photo>/<method>/result.json (probe scores per material and probe,
@@ -113,7 +114,7 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, quiet):
 
         prior = load_run_model(model, device=torch_device())
     summary = run_photo_benchmark(bench, out_dir, method_list, preset, prior, eval_spp, _shard(shard),
-                                  progress=not quiet,
+                                  progress=not quiet, overrides=parse_sets(sets),
                                   model_name=str(Path(model).resolve()) if prior is not None else None)
     click.echo(f"run-photos: {len(summary.done)} done, {len(summary.skipped)} already done, "
                f"{len(summary.failed)} failed -> {out_dir}")

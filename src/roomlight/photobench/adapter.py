@@ -43,7 +43,8 @@ def _photo(name: str):
                              f"here ({exc}); only the oracle methods can run") from None
 
 
-def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, progress: bool = False) -> dict:
+def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, progress: bool = False,
+                   overrides: dict | None = None) -> dict:
     """Fit ``method`` to the photo case ``case_dir`` with the fit-photo ``preset``; write the fit's
     files (``panorama.exr``, ``emitter/``, ``materials.json``, ``result.json``, ...) to ``out_dir``.
 
@@ -52,6 +53,7 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
         method: one of :data:`PHOTO_FIT_METHODS`.
         preset: a fit-photo preset (``paper``, ``fast``).
         model: the prior (a ``PanoVAE``) for the prior methods.
+        overrides: fit-photo settings that replace the preset's (``{"iterations": 300}``).
     Returns:
         ``{"radiance": (H, W, 3) float32, "depth": (H, W) float32 or None, "emitter_kind": str,
         "light_from_camera": (4, 4) float64 similarity (camera frame -> the light's frame:
@@ -62,7 +64,7 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
     if method not in PHOTO_FIT_METHODS:
         raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_FIT_METHODS)}")
     t0 = time.perf_counter()
-    config = config_mod.photo_config(preset)
+    config = config_mod.photo_config(preset, **(overrides or {}))
     case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
     out = Path(out_dir)
     fit = fitter_mod.fit_photo(case, method, config, model=model, out_dir=out, progress=progress)

@@ -107,10 +107,11 @@ def _recovered(fit: dict) -> RecoveredLight:
 
 
 def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, eval_spp: int = DEFAULT_EVAL_SPP,
-                   fit=None, progress: bool = False) -> dict:
+                   fit=None, progress: bool = False, overrides: dict | None = None) -> dict:
     """Fit (or take the oracle), score and write one case; returns its ``result.json`` record.
 
-    ``fit``: the fitting function, :func:`~roomlight.photobench.adapter.fit_photo_case` by default.
+    ``fit``: the fitting function, :func:`~roomlight.photobench.adapter.fit_photo_case` by default;
+    ``overrides``: fit-photo settings replacing the preset's.
     """
     from roomlight.io import write_panorama
     from roomlight.photobench.case import write_rgb_exr
@@ -125,7 +126,8 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
         light = oracle_light(case.case_dir, ORACLES[case.method], truth)
         fit_seconds = 0.0
     else:
-        out = fit(case.case_dir, case.method, preset, cdir / "fit", model=model, progress=progress)
+        out = fit(case.case_dir, case.method, preset, cdir / "fit", model=model, progress=progress,
+                  overrides=overrides)
         light = _recovered(out)
         materials = material_errors(truth.materials, out.get("materials") or {})
         fit_seconds = float(out.get("seconds", time.perf_counter() - t0))
@@ -157,7 +159,7 @@ def _check_run_file(out: Path, settings: dict) -> None:
         except ValueError:
             old = None
         if isinstance(old, dict):
-            for key in ("preset", "eval_spp", "max_depth"):
+            for key in ("preset", "overrides", "eval_spp", "max_depth"):
                 if key in old and old[key] != settings[key]:
                     raise RoomlightError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
                                          f"now {settings[key]!r}); use another --out, or delete it to start over")
@@ -166,13 +168,14 @@ def _check_run_file(out: Path, settings: dict) -> None:
 
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
                         eval_spp: int = DEFAULT_EVAL_SPP, shard=(0, 1), progress: bool = True, fit=None,
-                        model_name: str | None = None) -> PhotoRunSummary:
+                        model_name: str | None = None, overrides: dict | None = None) -> PhotoRunSummary:
     """Run (a shard of) the photo benchmark; see the module docstring.
 
     Args:
         bench_dir: a folder written by ``roomlight bench make-photos``; out_dir: the results folder.
         methods: method names (default :data:`DEFAULT_METHODS`); see :data:`KNOWN_METHODS`.
-        preset: the fit-photo preset; model: the prior for the prior methods.
+        preset: the fit-photo preset; overrides: settings replacing the preset's (``--set``);
+            model: the prior for the prior methods.
         fit: the fitting function (default: :func:`~roomlight.photobench.adapter.fit_photo_case`).
         model_name: where the prior came from, recorded in ``run.json``.
     """
@@ -187,7 +190,7 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     settings = {"bench": str(bench), "kind": "photos", "methods": list(methods), "preset": preset,
-                "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH}
+                "overrides": dict(overrides or {}), "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH}
     if model_name is not None:
         settings["model"] = str(model_name)
     _check_run_file(out, settings)
@@ -205,7 +208,7 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
         for c in todo:
             name = f"{c.photo}/{c.method}"
             try:
-                run_photo_case(c, out, preset, model, eval_spp, fit, progress=False)
+                run_photo_case(c, out, preset, model, eval_spp, fit, progress=False, overrides=overrides)
                 summary.done.append(name)
             except KeyboardInterrupt:
                 raise
