@@ -183,53 +183,57 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
     if tmp.exists():
         shutil.rmtree(tmp)
     (tmp / fmt.TRUTH).mkdir(parents=True)
-    photo = image * k
-    fmt.write_rgb_exr(tmp / fmt.IMAGE, photo)
-    fmt.write_depth_exr(tmp / fmt.DEPTH, _depth_for_methods(depth, config, index))
-    fmt.write_png(tmp / fmt.MASK, labels)
-    fmt.write_json(tmp / fmt.CAMERA, fmt.camera_json(cam))
-    fmt.write_json(tmp / fmt.TRUE_CAMERA, cam.to_dict())
-    fmt.write_depth_exr(tmp / fmt.TRUE_DEPTH, depth)
-    fmt.write_png(tmp / fmt.PROBE_MASK, probe_labels)
-    fmt.write_png(tmp / fmt.PREVIEW, record_ldr(photo))
-    for m, img in probe_renders.items():
-        fmt.write_rgb_exr(tmp / fmt.probe_image_name(m), img)
-        fmt.write_png(tmp / fmt.probe_image_name(m, "png"), record_ldr(img))
-    write_panorama(tmp / fmt.ORACLE, (oracle_rad, oracle_depth), half=False,
-                   metadata={"center": [float(c) for c in st.oracle_center], "frame": "world axes",
-                             "exposure": float(k)})
-    world_to_cam = np.linalg.inv(cam.matrix)
-    materials = {str(o.label): {**o.to_dict()} for o in st.objects}
-    fmt.write_json(tmp / fmt.MATERIALS, {"objects": materials,
-                                         "bsdf": "Mitsuba principled (base_color, roughness, metallic)"})
-    probes = [{**p.to_dict(), "center_camera": [float(c) for c in
-                                                (world_to_cam[:3, :3] @ np.asarray(p.center) + world_to_cam[:3, 3])]}
-              for p in st.probes]
-    fmt.write_json(tmp / fmt.PROBES, {"probes": probes, "materials": list(PROBE_MATERIALS),
-                                      "images": {m: fmt.probe_image_name(m) for m in PROBE_MATERIALS},
-                                      "window": list(window), "spp": config.probe_spp, "mask": fmt.PROBE_MASK,
-                                      "noise_floor": noise_floor})
-    record = {
-        "name": name, "index": index, "room_seed": int(room.seed), "generator": GENERATOR_VERSION,
-        "room": {"type": room.room_type, "lighting": room.lighting, "shell": room.shell,
-                 "height": float(room.height), "capture": [float(c) for c in room.capture]},
-        "camera": cam.to_dict(), "target": [float(c) for c in st.target], "staging_tries": st.tries,
-        "objects": [o.to_dict() for o in st.objects], "probes": probes,
-        "oracle": {"center": [float(c) for c in st.oracle_center], "height": config.oracle_height,
-                   "spp": config.oracle_spp},
-        "exposure": float(k), "key": config.key, "seeds": seeds, "probe_window": list(window),
-        "noise_floor": noise_floor,
-        "pixels": {"objects": {str(o.label): int((labels == o.label).sum()) for o in st.objects},
-                   "probes": {str(p.label): int((probe_labels == p.label).sum()) for p in st.probes}},
-        "saturated_fraction": saturated_fraction(record_ldr(photo), labels > 0),
-        "config": config.scene_settings(), "depth": config.depth_settings(),
-        "seconds": round(time.perf_counter() - t0, 2),
-    }
-    fmt.write_json(tmp / fmt.RECORD, record)
-    final = out / name
-    if final.exists():
-        shutil.rmtree(final)
-    os.replace(tmp, final)
+    try:
+        photo = image * k
+        fmt.write_rgb_exr(tmp / fmt.IMAGE, photo)
+        fmt.write_depth_exr(tmp / fmt.DEPTH, _depth_for_methods(depth, config, index))
+        fmt.write_png(tmp / fmt.MASK, labels)
+        fmt.write_json(tmp / fmt.CAMERA, fmt.camera_json(cam))
+        fmt.write_json(tmp / fmt.TRUE_CAMERA, cam.to_dict())
+        fmt.write_depth_exr(tmp / fmt.TRUE_DEPTH, depth)
+        fmt.write_png(tmp / fmt.PROBE_MASK, probe_labels)
+        fmt.write_png(tmp / fmt.PREVIEW, record_ldr(photo))
+        for m, img in probe_renders.items():
+            fmt.write_rgb_exr(tmp / fmt.probe_image_name(m), img)
+            fmt.write_png(tmp / fmt.probe_image_name(m, "png"), record_ldr(img))
+        write_panorama(tmp / fmt.ORACLE, (oracle_rad, oracle_depth), half=False,
+                       metadata={"center": [float(c) for c in st.oracle_center], "frame": "world axes",
+                                 "exposure": float(k)})
+        world_to_cam = np.linalg.inv(cam.matrix)
+        materials = {str(o.label): {**o.to_dict()} for o in st.objects}
+        fmt.write_json(tmp / fmt.MATERIALS, {"objects": materials,
+                                             "bsdf": "Mitsuba principled (base_color, roughness, metallic)"})
+        probes = [{**p.to_dict(), "center_camera": [float(c) for c in
+                                                    (world_to_cam[:3, :3] @ np.asarray(p.center) + world_to_cam[:3, 3])]}
+                  for p in st.probes]
+        fmt.write_json(tmp / fmt.PROBES, {"probes": probes, "materials": list(PROBE_MATERIALS),
+                                          "images": {m: fmt.probe_image_name(m) for m in PROBE_MATERIALS},
+                                          "window": list(window), "spp": config.probe_spp, "mask": fmt.PROBE_MASK,
+                                          "noise_floor": noise_floor})
+        record = {
+            "name": name, "index": index, "room_seed": int(room.seed), "generator": GENERATOR_VERSION,
+            "room": {"type": room.room_type, "lighting": room.lighting, "shell": room.shell,
+                     "height": float(room.height), "capture": [float(c) for c in room.capture]},
+            "camera": cam.to_dict(), "target": [float(c) for c in st.target], "staging_tries": st.tries,
+            "objects": [o.to_dict() for o in st.objects], "probes": probes,
+            "oracle": {"center": [float(c) for c in st.oracle_center], "height": config.oracle_height,
+                       "spp": config.oracle_spp},
+            "exposure": float(k), "key": config.key, "seeds": seeds, "probe_window": list(window),
+            "noise_floor": noise_floor,
+            "pixels": {"objects": {str(o.label): int((labels == o.label).sum()) for o in st.objects},
+                       "probes": {str(p.label): int((probe_labels == p.label).sum()) for p in st.probes}},
+            "saturated_fraction": saturated_fraction(record_ldr(photo), labels > 0),
+            "config": config.scene_settings(), "depth": config.depth_settings(),
+            "seconds": round(time.perf_counter() - t0, 2),
+        }
+        fmt.write_json(tmp / fmt.RECORD, record)
+        final = out / name
+        if final.exists():
+            shutil.rmtree(final)
+        os.replace(tmp, final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)  # never a half-written photo
+        raise
     return record
 
 
