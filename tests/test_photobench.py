@@ -460,7 +460,6 @@ def _stand_in_fit(calls):
 
 
 @pytest.mark.mitsuba
-@pytest.mark.slow
 def test_runner_resumes_shards_records_failures_and_the_report_pairs_methods(built, tmp_path):
     from roomlight.photobench.report import write_photo_report
     from roomlight.photobench.runner import list_photo_cases, run_photo_benchmark
