@@ -27,7 +27,7 @@ import numpy as np
 
 from roomlight.bench.metrics import METRICS
 from roomlight.bench.paired import paired_differences, paired_markdown
-from roomlight.bench.tables import METHOD_ORDER, markdown_table, ordered, summarize, write_wide_csv
+from roomlight.bench.tables import markdown_table, ordered, summarize, write_wide_csv
 from roomlight.errors import RoomlightError
 from roomlight.photobench.objects import PROBE_MATERIALS
 from roomlight.photobench.runner import ORACLES, RESULT

@@ -54,7 +54,7 @@ __all__ = ["SCORE_MAX_DEPTH", "SCORE_SEED", "MATERIAL_METRICS", "RecoveredLight"
 
 #: Longest light path of the scoring renders (the paper's renders: 4).
 SCORE_MAX_DEPTH = 4
-#: Base seed of the scoring renders (the ground truth's seeds are below 2^30 + 4).
+#: Base seed of the scoring renders (the ground truth's seeds stay below 2^29 + 2^25).
 SCORE_SEED = 7_000_001 + (1 << 30)
 #: Material errors per object (all lower-is-better): RMSE of the linear RGB albedo, absolute
 #: roughness error, absolute metallic error.
