@@ -525,7 +525,7 @@ def test_cli_make_run_report_and_one_line_errors(built, tmp_path):
     out = tmp_path / "bench"
     shutil.copytree(built, out)
     r = run_cli("bench", "make-photos", "--out", out, "--n", 1, "--res", "72x96", "--spp", 16, "--probes", 2,
-                "--set", "probe_spp=128", "--set", "oracle_height=16", "--set", "oracle_spp=16", "--set",
+                "--probe-spp", 128, "--set", "oracle_height=16", "--set", "oracle_spp=16", "--set",
                 "min_pixels=8", "--quiet")
     assert r.exit_code == 0 and "1 already built" in r.output, r.output
     res = tmp_path / "res"

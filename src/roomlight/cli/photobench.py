@@ -33,7 +33,10 @@ def _shard(text):
 @click.option("--res", type=RESOLUTION, default=None,
               help=f"Photo size HxW [default: {PhotoBenchConfig.height}x{PhotoBenchConfig.width}].")
 @click.option("--spp", type=int, default=None,
-              help=f"Samples per pixel of the photo and the probe renders {default_of(PhotoBenchConfig, 'spp')}.")
+              help=f"Samples per pixel of the photo {default_of(PhotoBenchConfig, 'spp')}.")
+@click.option("--probe-spp", type=int, default=None,
+              help="Samples per pixel of the ground-truth probe renders (only the window around the probes) "
+                   f"{default_of(PhotoBenchConfig, 'probe_spp')}.")
 @click.option("--fov", type=FINITE, default=None,
               help=f"Horizontal field of view in degrees {default_of(PhotoBenchConfig, 'fov')}.")
 @click.option("--probes", type=int, default=None,
@@ -44,10 +47,13 @@ def _shard(text):
 @click.option("--depth-scale", type=FINITE, default=None, metavar="F",
               help="Scale the depth the methods get by F (a wrong metric scale) [default: 1].")
 @click.option("--shard", default=None, metavar="I/N", help="Build only photos I, I+N, I+2N, ... (0 <= I < N).")
-@sets_option("photo benchmark setting (PhotoBenchConfig)")
+@click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
+              help="Change any photo benchmark setting (PhotoBenchConfig; docs/benchmark.md), e.g. "
+                   "--set oracle_height=32 --set objects=[2,2] (repeatable).")
 @click.option("--overwrite", is_flag=True, help="Rebuild photos that are already built.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def make_photos(out_dir, n, seed, res, spp, fov, probes, depth_noise, depth_scale, shard, sets, overwrite, quiet):
+def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, depth_noise, depth_scale, shard, sets, overwrite,
+                quiet):
     """Render the photo benchmark: photos of procedural rooms with inserted objects, and their truth.
 
     Each OUT/photo-NNNNN/ is a photo case (image.exr, depth.exr, mask.png, camera.json; what
@@ -60,8 +66,8 @@ def make_photos(out_dir, n, seed, res, spp, fov, probes, depth_noise, depth_scal
 
     cfg = PhotoBenchConfig(n=n, seed=seed)
     height, width = res if res else (None, None)
-    cfg = cfg.override(width=width, height=height, spp=spp, fov=fov, probes=probes, depth_noise=depth_noise,
-                       depth_scale=depth_scale, **parse_sets(sets))
+    cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, fov=fov, probes=probes,
+                       depth_noise=depth_noise, depth_scale=depth_scale, **parse_sets(sets))
     result = make_photo_benchmark(out_dir, cfg, overwrite=overwrite, shard=_shard(shard), progress=not quiet)
     click.echo(f"make-photos: {len(result['built'])} built, {len(result['updated'])} with a new depth, "
                f"{len(result['skipped'])} already built, {len(result['failed'])} failed; "
