@@ -21,6 +21,7 @@ LAYERS = [
     ["demo"],
     ["train", "parallax"],
     ["viewer"],
+    ["photobench"],
     ["export"],
     ["eval", "bench", "synth", "prepare"],
     ["inverse", "data"],

@@ -44,7 +44,7 @@ def bootstrap_mean_interval(values, level: float = 0.95, resamples: int = RESAMP
 
 
 def paired_differences(records: list[dict], method: str = "prior", view: str = "eval",
-                       exclude=("oracle",)) -> dict:
+                       exclude=("oracle",), metrics=METRICS, higher_is_better=None) -> dict:
     """``{baseline: {material: {metric: stats}}}`` of ``method - baseline`` over shared scenes.
 
     ``records`` are benchmark results (``scene``, ``method``, ``material``, ``metrics[view]``).
@@ -52,7 +52,10 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
     non-finite value is left out of that comparison. ``stats`` holds ``mean``, ``ci95``
     (bootstrap interval of the mean difference), ``wins`` (scenes where ``method`` is strictly
     better), ``n`` and ``better`` ("higher" or "lower": which sign of the difference is good).
+    ``metrics`` and ``higher_is_better`` (``{metric: bool}``) name other scores than the
+    benchmark's three (e.g. material errors).
     """
+    higher = HIGHER_IS_BETTER if higher_is_better is None else higher_is_better
     table: dict[tuple, dict] = {}
     for r in records:
         m = r.get("metrics", {}).get(view)
@@ -61,7 +64,7 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
     baselines = sorted({meth for v in table.values() for meth in v} - {method} - set(exclude))
     out: dict = {}
     for base in baselines:
-        for metric in METRICS:
+        for metric in metrics:
             per_material: dict[str, list[float]] = {}
             for (scene, material), by_method in sorted(table.items()):
                 if method not in by_method or base not in by_method:
@@ -71,11 +74,11 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
                     per_material.setdefault(material, []).append(d)
             for material, diffs in per_material.items():
                 a = np.asarray(diffs)
-                good = a > 0 if HIGHER_IS_BETTER[metric] else a < 0
+                good = a > 0 if higher[metric] else a < 0
                 lo, hi = bootstrap_mean_interval(a)
                 out.setdefault(base, {}).setdefault(material, {})[metric] = {
                     "mean": float(a.mean()), "ci95": [lo, hi], "wins": int(good.sum()), "n": int(a.size),
-                    "better": "higher" if HIGHER_IS_BETTER[metric] else "lower"}
+                    "better": "higher" if higher[metric] else "lower"}
     return out
 
 
@@ -89,20 +92,22 @@ def _cell(s: dict, metric: str) -> str:
     return f"{s['mean']:+.{digits}f} [{lo:+.{digits}f}, {hi:+.{digits}f}] {s['wins']}/{s['n']}{mark}"
 
 
-def paired_markdown(paired: dict, method: str = "prior", materials=None) -> str:
+def paired_markdown(paired: dict, method: str = "prior", materials=None, labels: dict | None = None) -> str:
     """Markdown table: one row per baseline x metric, one column per material.
 
     Each cell: mean difference ``method - baseline`` [95 % bootstrap interval] wins/scenes;
-    ✓ marks an interval entirely on the good side, ✗ entirely on the bad side.
+    ✓ marks an interval entirely on the good side, ✗ entirely on the bad side. ``labels``
+    (``{metric: row label}``) gives the rows for other metrics than the benchmark's three.
     """
     if not paired:
         return "_no paired scenes_\n"
     materials = materials or sorted({mat for b in paired.values() for mat in b})
-    labels = {"psnr_ldr": "Δ PSNR LDR (dB, ↑)", "rmse_hdr": "Δ RMSE HDR (↓)", "angular_error": "Δ angular error (°, ↓)"}
+    labels = labels or {"psnr_ldr": "Δ PSNR LDR (dB, ↑)", "rmse_hdr": "Δ RMSE HDR (↓)",
+                        "angular_error": "Δ angular error (°, ↓)"}
     lines = [f"| {method} − baseline | metric | " + " | ".join(materials) + " |",
              "|---|---|" + "|".join([":---:"] * len(materials)) + "|"]
     for base, mats in paired.items():
-        for metric in METRICS:
+        for metric in labels:
             cells = [_cell(mats[mat][metric], metric) if metric in mats.get(mat, {}) else "–" for mat in materials]
             lines.append(f"| {base} | {labels[metric]} | " + " | ".join(cells) + " |")
     lines += ["", f"Cells: mean per-scene difference {method} − baseline [95 % bootstrap interval of the mean, "

@@ -32,6 +32,13 @@ def command():
       roomlight bench make --panos PANOS/ --out bench/        scenes from panoramas with depth
       roomlight bench run bench/ --out res/ --model RUN       fit and score every method
       roomlight bench report res/                             tables, figures, index.html
+
+    The photo benchmark (rendered photographs of procedural rooms, true light transport):
+
+    \b
+      roomlight bench make-photos --out photos/ --n 8         photo cases + ground-truth probes
+      roomlight bench run-photos photos/ --out pres/          fit-photo every method, score probes
+      roomlight bench report-photos pres/                     tables, paired statistics, figures
     """
 
 
@@ -146,3 +153,10 @@ def report(results, out_dir, no_figures, quiet):
     paths = write_report(results, out_dir, figures=not no_figures, progress=not quiet)
     click.echo(paths["markdown"].read_text())
     click.echo(f"report -> {paths['html']}")
+
+
+# The photo benchmark's commands (rendered photographs with full light transport as ground truth).
+from roomlight.cli.photobench import make_photos, report_photos, run_photos  # noqa: E402
+
+for _photo_command in (make_photos, run_photos, report_photos):
+    command.add_command(_photo_command)

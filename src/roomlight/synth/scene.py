@@ -22,7 +22,7 @@ from roomlight.synth.mesh import MeshArrays, MeshBuilder
 from roomlight.synth.portal import portal_emitter, portal_power, portal_quad
 from roomlight.synth.spec import Room
 
-__all__ = ["DEFAULT_MAX_DEPTH", "build_scene", "room_meshes"]
+__all__ = ["DEFAULT_MAX_DEPTH", "build_scene", "room_meshes", "scene_entries"]
 
 #: Path length limit (Mitsuba's ``max_depth``: 1 = emitters seen directly, 2 = direct
 #: lighting, 5 = three indirect bounces).
@@ -69,17 +69,13 @@ def _mean_emission(m) -> float:
     return lum
 
 
-def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | None = None,
-                integrator: dict | None = None):
-    """Instantiate the room as a ``mi.Scene`` with a ``path`` integrator.
+def scene_entries(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | None = None,
+                  integrator: dict | None = None) -> dict:
+    """The room's ``mi.load_dict`` entries: the integrator and its instantiated meshes and emitters.
 
-    Args:
-        room: the room description.
-        max_depth: Mitsuba path length limit (see :data:`DEFAULT_MAX_DEPTH`).
-        rr_depth: depth at which Russian roulette starts (default: ``max_depth``, i.e. none).
-        integrator: a full integrator dict overriding the two settings above.
-    Returns:
-        ``mi.Scene`` (no sensor: render it with :mod:`roomlight.synth.camera`).
+    The entries can be loaded more than once, with other entries added (objects placed in the
+    room), without triangulating and texturing the room again: ``mi.load_dict({**entries, **more})``.
+    Arguments as :func:`build_scene`.
     """
     mi = mitsuba()
     meshes = room_meshes(room)
@@ -89,7 +85,6 @@ def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | 
         m = room.materials[name]
         if m.emission is not None and max(m.emission) > 0:
             powers[name] = math.pi * arrays.area * _mean_emission(m)
-    portals = []
     for k, w in enumerate(room.windows):
         sky_flux, sun_flux = portal_power(w, room.sky)
         powers[f"portal_{k}"] = sky_flux + sun_flux
@@ -113,7 +108,20 @@ def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | 
         builder = MeshBuilder()
         builder.quad(o, a, b, "local")
         emitter = portal_emitter(mi, w, room.sky, powers[f"portal_{k}"] + floor)
-        portals.append(emitter)
         entries[f"portal_{k}"] = _mesh(mi, f"portal_{k}", builder.build(), black, emitter)
-    scene = mi.load_dict(entries)
-    return scene
+    return entries
+
+
+def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | None = None,
+                integrator: dict | None = None):
+    """Instantiate the room as a ``mi.Scene`` with a ``path`` integrator.
+
+    Args:
+        room: the room description.
+        max_depth: Mitsuba path length limit (see :data:`DEFAULT_MAX_DEPTH`).
+        rr_depth: depth at which Russian roulette starts (default: ``max_depth``, i.e. none).
+        integrator: a full integrator dict overriding the two settings above.
+    Returns:
+        ``mi.Scene`` (no sensor: render it with :mod:`roomlight.synth.camera`).
+    """
+    return mitsuba().load_dict(scene_entries(room, max_depth, rr_depth, integrator))

@@ -1,0 +1,146 @@
+"""``roomlight bench make-photos | run-photos | report-photos``: the photo benchmark (attached to ``bench``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from roomlight.cli.common import FINITE, RESOLUTION, default_of, parse_sets, sets_option
+from roomlight.photobench.config import PhotoBenchConfig
+from roomlight.photobench.runner import DEFAULT_EVAL_SPP, DEFAULT_METHODS, KNOWN_METHODS
+
+__all__ = ["make_photos", "run_photos", "report_photos"]
+
+
+def _csv(value):
+    if value is None:
+        return None
+    items = tuple(s.strip() for s in str(value).split(",") if s.strip())
+    return items or None
+
+
+def _shard(text):
+    from roomlight.bench.runner import parse_shard
+
+    return parse_shard(text)
+
+
+@click.command("make-photos")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Benchmark folder to write.")
+@click.option("--n", type=int, default=PhotoBenchConfig.n, show_default=True, help="Photos (indices 0 .. N-1).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Base seed (rooms, staging, materials, renders).")
+@click.option("--res", type=RESOLUTION, default=None,
+              help=f"Photo size HxW [default: {PhotoBenchConfig.height}x{PhotoBenchConfig.width}].")
+@click.option("--spp", type=int, default=None,
+              help=f"Samples per pixel of the photo {default_of(PhotoBenchConfig, 'spp')}.")
+@click.option("--probe-spp", type=int, default=None,
+              help="Samples per pixel of the ground-truth probe renders (only the window around the probes) "
+                   f"{default_of(PhotoBenchConfig, 'probe_spp')}.")
+@click.option("--fov", type=FINITE, default=None,
+              help=f"Horizontal field of view in degrees {default_of(PhotoBenchConfig, 'fov')}.")
+@click.option("--probes", type=int, default=None,
+              help=f"Probe positions per photo {default_of(PhotoBenchConfig, 'probes')}.")
+@click.option("--depth-noise", type=FINITE, default=None, metavar="SIGMA",
+              help="Degrade the depth the methods get: depth x exp(SIGMA n), n a smooth unit-RMS random field "
+                   "(the truth keeps the exact depth) [default: 0].")
+@click.option("--depth-scale", type=FINITE, default=None, metavar="F",
+              help="Scale the depth the methods get by F (a wrong metric scale) [default: 1].")
+@click.option("--shard", default=None, metavar="I/N", help="Build only photos I, I+N, I+2N, ... (0 <= I < N).")
+@click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
+              help="Change any photo benchmark setting (PhotoBenchConfig; docs/benchmark.md), e.g. "
+                   "--set oracle_height=32 --set objects=[2,2] (repeatable).")
+@click.option("--overwrite", is_flag=True, help="Rebuild photos that are already built.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, depth_noise, depth_scale, shard, sets, overwrite,
+                quiet):
+    """Render the photo benchmark: photos of procedural rooms with inserted objects, and their truth.
+
+    Each OUT/photo-NNNNN/ is a photo case (image.exr, depth.exr, mask.png, camera.json; what
+    `roomlight fit-photo` reads) plus truth/: probe spheres (diffuse, matte, mirror) path-traced
+    at several positions near the objects, their masks and positions, the objects' true materials,
+    the exact depth and an oracle light. Finished photos are skipped; photos built with other
+    --depth-noise/--depth-scale only get a new depth.exr. OUT/manifest.json lists the photos.
+    """
+    from roomlight.photobench.builder import make_photo_benchmark
+
+    cfg = PhotoBenchConfig(n=n, seed=seed)
+    height, width = res if res else (None, None)
+    cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, fov=fov, probes=probes,
+                       depth_noise=depth_noise, depth_scale=depth_scale, **parse_sets(sets))
+    result = make_photo_benchmark(out_dir, cfg, overwrite=overwrite, shard=_shard(shard), progress=not quiet)
+    click.echo(f"make-photos: {len(result['built'])} built, {len(result['updated'])} with a new depth, "
+               f"{len(result['skipped'])} already built, {len(result['failed'])} failed; "
+               f"{len(result['photos'])} photos in {out_dir}/manifest.json")
+    for name, err in result["failed"].items():
+        click.echo(f"  failed {name}: {err}", err=True)
+    if result["failed"]:
+        raise SystemExit(1)
+
+
+@click.command("run-photos")
+@click.argument("bench", type=click.Path())
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
+@click.option("--methods", default=None,
+              help=f"Comma-separated methods [default: {','.join(DEFAULT_METHODS)}]; also oracle and oracle-envmap "
+                   "(the photo's room captured at the probes, as a 2.5D light or at infinity: references).")
+@click.option("--model", type=click.Path(), default=None,
+              help="Trained prior for the prior methods [default: the prior bundled with roomlight].")
+@click.option("--preset", default="paper", show_default=True,
+              help="The fit-photo preset (paper, fast; see `roomlight fit-photo --help`).")
+@click.option("--eval-spp", type=int, default=DEFAULT_EVAL_SPP, show_default=True,
+              help="Samples per pixel of the probe renders under the recovered lights.")
+@click.option("--shard", default=None, metavar="I/N", help="Run only cases I, I+N, I+2N, ... (0 <= I < N).")
+@sets_option("fit-photo setting")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, quiet):
+    """Fit every photo of BENCH with each method and score the probes under the recovered light.
+
+    Each case writes OUT/cases/<photo>/<method>/result.json (probe scores per material and probe,
+    material errors); finished cases are skipped, so re-running resumes. Failed cases are
+    reported and retried on the next run.
+    """
+    from roomlight.photobench.runner import run_photo_benchmark
+
+    method_list = _csv(methods) or DEFAULT_METHODS
+    bad = [m for m in method_list if m not in KNOWN_METHODS]
+    if bad:
+        raise click.UsageError(f"--methods: unknown method(s) {', '.join(bad)}; choose from {', '.join(KNOWN_METHODS)}")
+    prior = None
+    if any(m.startswith("prior") for m in method_list):
+        if model is None:
+            from roomlight.demo import bundled_prior_path
+
+            model = bundled_prior_path()
+            if model is None:
+                raise click.UsageError("the prior methods need --model (a trained prior); this installation has "
+                                       "no bundled prior")
+        from roomlight.model.runs import load_run_model
+        from roomlight.render.variant import torch_device
+
+        prior = load_run_model(model, device=torch_device())
+    summary = run_photo_benchmark(bench, out_dir, method_list, preset, prior, eval_spp, _shard(shard),
+                                  progress=not quiet, overrides=parse_sets(sets),
+                                  model_name=str(Path(model).resolve()) if prior is not None else None)
+    click.echo(f"run-photos: {len(summary.done)} done, {len(summary.skipped)} already done, "
+               f"{len(summary.failed)} failed -> {out_dir}")
+    for name, err in summary.failed.items():
+        click.echo(f"  failed {name}: {err}", err=True)
+    if summary.failed:
+        raise SystemExit(1)
+
+
+@click.command("report-photos")
+@click.argument("results", type=click.Path())
+@click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
+              help="Report folder [default: RESULTS/report].")
+@click.option("--no-figures", is_flag=True, help="Tables only (no per-photo figures).")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def report_photos(results, out_dir, no_figures, quiet):
+    """The photo benchmark's tables (probes: method x material x metric; recovered materials), paired
+    statistics, a figure per photo and index.html, from the RESULTS of run-photos."""
+    from roomlight.photobench.report import write_photo_report
+
+    paths = write_photo_report(results, out_dir, figures=not no_figures, progress=not quiet)
+    click.echo(paths["markdown"].read_text())
+    click.echo(f"report -> {paths['html']}")

@@ -1,0 +1,83 @@
+"""The one place the photo benchmark calls the photo fit (``roomlight fit-photo``, :mod:`roomlight.photo`).
+
+:func:`fit_photo_case` fits one method to one photo case folder and returns what the scoring
+needs, in the benchmark's own terms (plain numpy, no photo-fit classes). Everything else of the
+benchmark (building, scoring, running, reporting) only knows this function's signature and the
+dict it returns, so a change of the photo fit's API is absorbed here.
+
+``roomlight.photo`` is imported by name when a fit is asked for: the benchmark builds, scores
+oracles and is tested where the photo fit is not installed, and the layer order keeps
+``photobench`` above ``photo`` for when it is.
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from pathlib import Path
+
+import numpy as np
+
+from roomlight.errors import RoomlightError
+
+__all__ = ["PHOTO_FIT_METHODS", "fit_photo_case", "photo_fit_available"]
+
+#: The methods of ``roomlight fit-photo``.
+PHOTO_FIT_METHODS = ("prior", "prior-envmap", "direct-envmap")
+
+
+def photo_fit_available() -> bool:
+    """Whether the photo fit (:mod:`roomlight.photo`) can be imported here."""
+    try:
+        importlib.import_module("roomlight.photo")
+        return True
+    except ImportError:
+        return False
+
+
+def _photo(name: str):
+    try:
+        return importlib.import_module(f"roomlight.photo.{name}")
+    except ImportError as exc:
+        raise RoomlightError(f"run-photos: the photo fit (roomlight.photo, `roomlight fit-photo`) cannot be imported "
+                             f"here ({exc}); only the oracle methods can run") from None
+
+
+def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, progress: bool = False,
+                   overrides: dict | None = None) -> dict:
+    """Fit ``method`` to the photo case ``case_dir`` with the fit-photo ``preset``; write the fit's
+    files (``panorama.exr``, ``emitter/``, ``materials.json``, ``result.json``, ...) to ``out_dir``.
+
+    Args:
+        case_dir: a photo case folder (image, depth, mask, camera.json); ``truth/`` is not read.
+        method: one of :data:`PHOTO_FIT_METHODS`.
+        preset: a fit-photo preset (``paper``, ``fast``).
+        model: the prior (a ``PanoVAE``) for the prior methods.
+        overrides: fit-photo settings that replace the preset's (``{"iterations": 300}``).
+    Returns:
+        ``{"radiance": (H, W, 3) float32, "depth": (H, W) float32 or None, "emitter_kind": str,
+        "light_from_camera": (4, 4) float64 similarity (camera frame -> the light's frame:
+        p = s R p_camera + t), "materials": {label: {"albedo", "roughness", "metallic"}},
+        "seconds": fit time}``.
+    """
+    case_mod, config_mod, fitter_mod, outputs_mod = (_photo(n) for n in ("case", "config", "fitter", "outputs"))
+    if method not in PHOTO_FIT_METHODS:
+        raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_FIT_METHODS)}")
+    t0 = time.perf_counter()
+    config = config_mod.photo_config(preset, **(overrides or {}))
+    case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
+    out = Path(out_dir)
+    fit = fitter_mod.fit_photo(case, method, config, model=model, out_dir=out, progress=progress)
+    outputs_mod.write_fit_files(out, fit, case, config)
+    (out / fitter_mod.STATE_FILE).unlink(missing_ok=True)  # finished: the outputs are the result
+    t = fit.transform
+    m = np.eye(4)
+    m[:3, :3] = float(t.scale) * np.asarray(t.rotation, np.float64)
+    m[:3, 3] = np.asarray(t.translation, np.float64)
+    r = fit.result
+    return {"radiance": r.radiance.detach().float().cpu().numpy(),
+            "depth": None if r.depth is None else r.depth.detach().float().cpu().numpy(),
+            "emitter_kind": str(fit.fitter.escene.kind), "light_from_camera": m,
+            "materials": {int(e["label"]): {"albedo": e["albedo"], "roughness": e["roughness"],
+                                            "metallic": e["metallic"]} for e in fit.materials.to_json()},
+            "seconds": float(fit.timings.get("fit", time.perf_counter() - t0))}

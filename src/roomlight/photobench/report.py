@@ -1,0 +1,320 @@
+"""``roomlight bench report-photos``: the photo benchmark's tables, paired statistics, figures and page.
+
+The probe scores take the synthetic benchmark's Table 2 layout (:mod:`roomlight.bench.tables`):
+one row per method, one column per metric x probe material, mean +- std over photos; and its
+paired statistics (:mod:`roomlight.bench.paired`): per photo, ``prior - baseline``, with a 95 %
+bootstrap interval of the mean and the photos the prior wins. The recovered materials get the
+same treatment (mean +- std of the per-photo mean error over objects, and paired differences).
+
+Files written to ``OUT`` (default ``RES/report``):
+
+- ``report.md``     the tables, photo counts, failed cases, fit times
+- ``table.csv``     the probe table, wide: ``<metric>_<material>_{mean,std,n}``
+- ``materials.csv`` the material errors, one row per method
+- ``cases.csv``     one row per photo, method and probe material (long format)
+- ``summary.json``  everything above as JSON (``probes``, ``materials``, ``paired``, ``timing``)
+- ``figures/<photo>.png`` and ``index.html``
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+
+from roomlight.bench.metrics import METRICS
+from roomlight.bench.paired import paired_differences, paired_markdown
+from roomlight.bench.tables import markdown_table, ordered, summarize, write_wide_csv
+from roomlight.errors import RoomlightError
+from roomlight.photobench.objects import PROBE_MATERIALS
+from roomlight.photobench.runner import ORACLES, RESULT
+from roomlight.photobench.scoring import MATERIAL_METRICS
+
+__all__ = ["collect_photo_results", "probe_records", "material_records", "materials_table", "write_photo_report",
+           "PHOTO_METHOD_ORDER"]
+
+#: Row order: the baselines, the prior, then the references.
+PHOTO_METHOD_ORDER = ("direct-envmap", "prior-envmap", "prior", "oracle-envmap", "oracle")
+MATERIAL_LABELS = {"albedo_rmse": "albedo RMSE ↓", "roughness_error": "roughness error ↓",
+                   "metallic_error": "metallic error ↓"}
+_EXCLUDE = tuple(ORACLES)
+_LOWER = {m: False for m in MATERIAL_METRICS}
+_STYLE = ("body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1400px;padding:0 1em;line-height:1.45}"
+          "table{border-collapse:collapse;font-size:13px;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 6px;"
+          "text-align:center}th{background:#f3f3f3}img{max-width:100%}figure{margin:1.5em 0}"
+          "figcaption{font-size:14px;color:#333;max-width:70em}.note{color:#555;font-size:13px}")
+
+
+def collect_photo_results(res_dir) -> list[dict]:
+    """Every ``result.json`` under ``RES/cases`` (sorted by photo, then method)."""
+    root = Path(res_dir) / "cases"
+    if not root.is_dir():
+        raise RoomlightError(f"{res_dir}: no results (expected {root}; run `roomlight bench run-photos` first)")
+    out = []
+    for f in sorted(root.glob(f"*/*/{RESULT}")):
+        try:
+            rec = json.loads(f.read_text())
+        except ValueError as exc:
+            raise RoomlightError(f"{f}: not valid JSON: {exc}") from None
+        if all(k in rec for k in ("photo", "method", "probes")):
+            rec["_dir"] = str(f.parent)
+            out.append(rec)
+    return out
+
+
+def _failures(res_dir) -> list[dict]:
+    out = []
+    for f in sorted((Path(res_dir) / "cases").glob("*/*/error.json")):
+        if not (f.parent / RESULT).is_file():
+            try:
+                out.append(json.loads(f.read_text()))
+            except ValueError:
+                out.append({"case": str(f.parent), "error": "unreadable error.json"})
+    return out
+
+
+def probe_records(results: list[dict]) -> list[dict]:
+    """One record per photo, method and probe material, in the synthetic benchmark's record shape
+    (``scene``, ``material``, ``method``, ``metrics["eval"]``), so its tables and paired statistics apply."""
+    out = []
+    for r in results:
+        for m, scores in r["probes"].items():
+            out.append({"scene": r["photo"], "material": m, "method": r["method"],
+                        "emitter_kind": r.get("emitter_kind", "?"), "fit_seconds": r.get("fit_seconds"),
+                        "metrics": {"eval": {k: scores[k] for k in (*METRICS, "pixels") if k in scores}}})
+    return out
+
+
+def material_records(results: list[dict]) -> list[dict]:
+    """One record per photo and fitted method: the mean material errors over the photo's objects."""
+    return [{"scene": r["photo"], "material": "objects", "method": r["method"],
+             "metrics": {"materials": r["materials"]["mean"]}}
+            for r in results if r.get("materials") and r["materials"].get("per_object")]
+
+
+def materials_table(records: list[dict]) -> str:
+    """Markdown: one row per method, mean ± std over photos of each material error."""
+    if not records:
+        return "_no material estimates (oracles estimate none)_\n"
+    by: dict[str, list[dict]] = {}
+    for r in records:
+        by.setdefault(r["method"], []).append(r["metrics"]["materials"])
+    lines = ["| Method | " + " | ".join(MATERIAL_LABELS[k] for k in MATERIAL_METRICS) + " | photos |",
+             "|---|" + ":---:|" * len(MATERIAL_METRICS) + "---:|"]
+    for m in ordered(by, PHOTO_METHOD_ORDER):
+        cells = []
+        for k in MATERIAL_METRICS:
+            a = np.asarray([v[k] for v in by[m]], np.float64)
+            cells.append(f"{a.mean():.3f}" if a.size == 1 else f"{a.mean():.3f} ± {a.std():.3f}")
+        lines.append(f"| {m} | " + " | ".join(cells) + f" | {len(by[m])} |")
+    return "\n".join(lines) + "\n"
+
+
+def _timing(results: list[dict]) -> dict:
+    t: dict[str, list[float]] = {}
+    for r in results:
+        if r["method"] not in ORACLES and r.get("fit_seconds") is not None:
+            t.setdefault(r["method"], []).append(float(r["fit_seconds"]))
+    return {m: {"mean_fit_seconds": float(np.mean(v)), "cases": len(v)} for m, v in t.items()}
+
+
+def _cases_csv(path: Path, results: list[dict]) -> None:
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["photo", "method", "emitter_kind", "probe_material", *METRICS, "pixels", *MATERIAL_METRICS,
+                    "fit_seconds"])
+        for r in results:
+            mat = (r.get("materials") or {}).get("mean") or {}
+            for m, s in r["probes"].items():
+                w.writerow([r["photo"], r["method"], r.get("emitter_kind", ""), m, *[s[k] for k in METRICS],
+                            s.get("pixels", ""), *[mat.get(k, "") for k in MATERIAL_METRICS], r.get("fit_seconds", "")])
+
+
+def _materials_csv(path: Path, records: list[dict]) -> None:
+    by: dict[str, list[dict]] = {}
+    for r in records:
+        by.setdefault(r["method"], []).append(r["metrics"]["materials"])
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["method", *[f"{k}_{s}" for k in MATERIAL_METRICS for s in ("mean", "std")], "photos"])
+        for m in ordered(by, PHOTO_METHOD_ORDER):
+            row = [m]
+            for k in MATERIAL_METRICS:
+                a = np.asarray([v[k] for v in by[m]], np.float64)
+                row += [float(a.mean()), float(a.std())]
+            w.writerow(row + [len(by[m])])
+
+
+def _markdown(results, probes, mats, paired, paired_mat, timing, failures) -> str:
+    photos = len({r["photo"] for r in results})
+    md = ["# Photo benchmark results", "",
+          f"{len(results)} cases, {photos} photos. Cells: mean ± std over photos (one photo: its value alone); "
+          "best in bold (the oracles, references, never count).", "",
+          "## Probes at the true positions under each recovered light", "", markdown_table(probes, "eval"),
+          "## Paired differences on the probes: the prior against each baseline", "",
+          paired_markdown(paired, "prior", [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
+          "## Recovered materials (mean error over each photo's objects)", "", materials_table(mats),
+          "## Paired differences on the materials", "",
+          paired_markdown(paired_mat, "prior", ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()}),
+          "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
+    for m in ordered(timing, PHOTO_METHOD_ORDER):
+        md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")
+    if failures:
+        md += ["", "## Failed cases", ""]
+        md += [f"- `{f.get('case', '?')}`: {f.get('type', '')}: {f.get('error', '')}" for f in failures]
+    return "\n".join(md) + "\n"
+
+
+def photo_figure(photo: str, results: list[dict], path: Path) -> Path:
+    """One photo's figure: the ground truth, then one row per method: the photo or the recovered
+    radiance panorama, and the probes in each material (the probe window, gamma 2.2)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from roomlight.color import to_display
+    from roomlight.io import read_panorama
+    from roomlight.photobench import case as fmt
+
+    case_dir = Path(results[0]["case_dir"])
+    rows = [("ground truth", to_display(fmt.read_rgb_exr(case_dir / fmt.IMAGE)),
+             {m: fmt.read_rgb_exr(case_dir / fmt.probe_image_name(m)) for m in PROBE_MATERIALS}, None)]
+    for r in sorted(results, key=lambda r: ordered({x["method"] for x in results}, PHOTO_METHOD_ORDER).index(r["method"])):
+        d = Path(r["_dir"])
+        pano = to_display(read_panorama(d / "recovered.exr").radiance)
+        imgs = {m: fmt.read_rgb_exr(d / f"probes_{m}.exr") for m in PROBE_MATERIALS if (d / f"probes_{m}.exr").is_file()}
+        rows.append((f"{r['method']} ({r.get('emitter_kind', '?')})", pano, imgs, r["probes"]))
+    fig, axes = plt.subplots(len(rows), 1 + len(PROBE_MATERIALS), figsize=(3.2 * (1 + len(PROBE_MATERIALS)),
+                                                                            2.4 * len(rows)), squeeze=False)
+    for i, (name, left, imgs, scores) in enumerate(rows):
+        axes[i, 0].imshow(left)
+        axes[i, 0].set_title(name if i else f"{photo}: the photo", fontsize=9)
+        for j, m in enumerate(PROBE_MATERIALS, start=1):
+            ax = axes[i, j]
+            if m in imgs:
+                ax.imshow(to_display(imgs[m]), interpolation="nearest")
+            title = m if scores is None else (f"{m}: {scores[m]['psnr_ldr']:.1f} dB, {scores[m]['angular_error']:.1f}°"
+                                              if m in scores else m)
+            ax.set_title(title, fontsize=8)
+        for ax in axes[i]:
+            ax.set_xticks([])
+            ax.set_yticks([])
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.partial.png")
+    fig.savefig(tmp, dpi=90)
+    plt.close(fig)
+    tmp.replace(path)
+    return path
+
+
+def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures: dict, settings: dict) -> Path:
+    from roomlight.bench.page import md_table_to_html
+
+    methods = ordered({r["method"] for r in results}, PHOTO_METHOD_ORDER)
+    parts = ["<!doctype html><html lang='en'><head><meta charset='utf-8'><title>roomlight photo benchmark</title>",
+             f"<style>{_STYLE}</style></head><body>", "<h1>roomlight photo benchmark</h1>",
+             (f"<p>{len(results)} cases, {len({r['photo'] for r in results})} photos, methods: "
+              f"{html.escape(', '.join(methods))}. Files: <a href='report.md'>report.md</a> · "
+              "<a href='table.csv'>table.csv</a> · <a href='materials.csv'>materials.csv</a> · "
+              "<a href='cases.csv'>cases.csv</a> · <a href='summary.json'>summary.json</a></p>"),
+             "<h2>What this report shows</h2>",
+             ("<p>Each photo is a path-traced view of a procedural room with two or three inserted objects of known "
+              "principled materials. Every method fits the room's light (and the objects' materials) from the photo, "
+              "its depth and its object mask. Probe spheres (gray diffuse, silver matte, silver mirror) are then "
+              "rendered at several true positions near the objects under the recovered light and compared with the "
+              "same probes path-traced in the real room: the ground truth is full light transport, not an emitter. "
+              "<em>oracle</em> is the room captured as a 2.5D light at the probes; <em>oracle-envmap</em> the same "
+              "radiance at infinity: the best each representation can do.</p>"),
+             f"<p class='note'>Scoring renders: {settings.get('eval_spp', '?')} samples per pixel, path depth "
+             f"{settings.get('max_depth', '?')}; fit preset {html.escape(str(settings.get('preset', '?')))}; prior "
+             f"{html.escape(str(settings.get('model', 'not recorded')))}.</p>",
+             "<h2>Probes</h2>", md_table_to_html(markdown_table(probes, "eval")),
+             "<h2>Paired differences on the probes: the prior against each baseline</h2>",
+             md_table_to_html(paired_markdown(paired, "prior", list(PROBE_MATERIALS))),
+             "<h2>Recovered materials</h2>", md_table_to_html(materials_table(mats)),
+             "<h2>Paired differences on the materials</h2>",
+             md_table_to_html(paired_markdown(paired_mat, "prior", ["objects"],
+                                              {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()})),
+             "<h2>Fit time</h2>"]
+    rows = "".join(f"<tr><td>{html.escape(m)}</td><td>{timing[m]['mean_fit_seconds']:.1f}</td>"
+                   f"<td>{timing[m]['cases']}</td></tr>" for m in ordered(timing, PHOTO_METHOD_ORDER))
+    parts.append(f"<table><tr><th>Method</th><th>mean fit seconds</th><th>cases</th></tr>{rows}</table>"
+                 if rows else "<p class='note'>No fit times (oracles only).</p>")
+    parts.append("<h2>Photos</h2>")
+    for photo, p in sorted(figures.items()):
+        rel = Path(p).relative_to(out)
+        parts.append(f"<figure id='{html.escape(photo)}'><img src='{html.escape(str(rel))}' alt='probes of "
+                     f"{html.escape(photo)}'><figcaption>{html.escape(photo)}: top row the photo and the true probes "
+                     "(cropped around them); below, per method, its recovered radiance panorama and the probes under "
+                     "its light, with PSNR LDR and RGB angular error per material.</figcaption></figure>")
+    parts.append("<p class='note'>Generated by <code>roomlight bench report-photos</code>.</p></body></html>")
+    path = out / "index.html"
+    path.write_text("\n".join(parts))
+    return path
+
+
+def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bool = True) -> dict[str, Path]:
+    """Write the report of a results folder (module docstring); returns the files by role."""
+    results = collect_photo_results(res_dir)
+    if not results:
+        raise RoomlightError(f"{res_dir}: no finished case (no result.json under {Path(res_dir) / 'cases'})")
+    failures = _failures(res_dir)
+    out = Path(out_dir) if out_dir else Path(res_dir) / "report"
+    out.mkdir(parents=True, exist_ok=True)
+    settings = {}
+    run_file = Path(res_dir) / "run.json"
+    if run_file.is_file():
+        try:
+            settings = json.loads(run_file.read_text())
+        except ValueError:
+            settings = {}
+    probes = probe_records(results)
+    mats = material_records(results)
+    paired = paired_differences(probes, "prior", "eval", exclude=_EXCLUDE)
+    paired_mat = paired_differences(mats, "prior", "materials", exclude=_EXCLUDE, metrics=MATERIAL_METRICS,
+                                    higher_is_better=_LOWER)
+    timing = _timing(results)
+    paths = {"markdown": out / "report.md", "csv": out / "table.csv", "materials": out / "materials.csv",
+             "cases": out / "cases.csv", "json": out / "summary.json"}
+    write_wide_csv(paths["csv"], probes, "eval")
+    _materials_csv(paths["materials"], mats)
+    _cases_csv(paths["cases"], results)
+    mat_summary: dict = {}
+    for r in mats:
+        mat_summary.setdefault(r["method"], []).append(r["metrics"]["materials"])
+    summary = {"cases": len(results), "photos": len({r["photo"] for r in results}),
+               "methods": ordered({r["method"] for r in results}, PHOTO_METHOD_ORDER),
+               "probes": summarize(probes, "eval"),
+               "materials": {m: {k: {"mean": float(np.mean([v[k] for v in vals])),
+                                     "std": float(np.std([v[k] for v in vals])), "n": len(vals)}
+                                 for k in MATERIAL_METRICS} for m, vals in mat_summary.items()},
+               "paired": {"probes": paired, "materials": paired_mat}, "timing": timing,
+               "failed": [f.get("case", "?") for f in failures], "settings": settings,
+               "std": "population standard deviation over photos (ddof = 0)"}
+    paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
+    paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures))
+    figs: dict[str, Path] = {}
+    if figures:
+        by: dict[str, list[dict]] = {}
+        for r in results:
+            by.setdefault(r["photo"], []).append(r)
+        items = sorted(by.items())
+        bar = None
+        if progress:
+            from roomlight.progress import progress_bar
+
+            bar = progress_bar(total=len(items), desc="report-photos", unit="figure")
+        for photo, rs in items:
+            figs[photo] = photo_figure(photo, rs, out / "figures" / f"{photo}.png")
+            if bar is not None:
+                bar.update()
+        if bar is not None:
+            bar.close()
+    paths["html"] = _index(out, results, probes, mats, paired, paired_mat, timing, figs, settings)
+    paths.update({f"figure:{k}": v for k, v in figs.items()})
+    return paths

@@ -1,0 +1,229 @@
+"""``roomlight bench run-photos``: fit every photo with every method and score the recovered light.
+
+For each case (photo x method), in manifest order:
+
+1. the method fits the photo case (:func:`roomlight.photobench.adapter.fit_photo_case`, the
+   fit-photo pipeline; its files go to ``CASE/fit``); the pseudo-methods ``oracle`` and
+   ``oracle-envmap`` fit nothing and take the photo's oracle light as a 2.5D light or an env map;
+2. the probes are rendered at their true positions under the recovered light and scored against
+   the ground truth (:mod:`roomlight.photobench.scoring`), and the recovered materials against
+   the true ones.
+
+Layout of ``RES``::
+
+    RES/run.json                        settings (checked on resume)
+    RES/cases/<photo>/<method>/
+        result.json       scores per probe material and probe, material errors, timings (written last)
+        recovered.exr     the recovered radiance (+ Z depth when it has one)
+        probes_<m>.exr    the probes under the recovered light, one per probe material
+        fit/              the fit's own files (panorama.exr, emitter/, materials.json, result.json, ...)
+        error.json        instead of result.json when the case failed (retried on the next run)
+
+Runs resume (a case with a ``result.json`` is skipped); ``shard=(i, n)`` takes cases
+``i, i + n, ...`` of the full list.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from roomlight.errors import RoomlightError
+from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
+from roomlight.photobench.builder import read_photo_manifest
+from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_truth, material_errors, oracle_light,
+                                          score_light)
+
+__all__ = ["ORACLES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE", "PhotoCase",
+           "PhotoRunSummary", "list_photo_cases", "run_photo_case", "run_photo_benchmark"]
+
+#: Pseudo-methods: the photo's oracle light as a 2.5D light, or shown at infinity.
+ORACLES = {"oracle": "mesh", "oracle-envmap": "envmap"}
+KNOWN_METHODS = PHOTO_FIT_METHODS + tuple(ORACLES)
+DEFAULT_METHODS = PHOTO_FIT_METHODS
+#: Samples per pixel of the scoring renders.
+DEFAULT_EVAL_SPP = 256
+RESULT = "result.json"
+RUN_FILE = "run.json"
+
+
+@dataclass(frozen=True)
+class PhotoCase:
+    """One (photo, method) pair."""
+
+    photo: str
+    case_dir: Path
+    method: str
+
+    def directory(self, out) -> Path:
+        return Path(out) / "cases" / self.photo / self.method
+
+
+@dataclass
+class PhotoRunSummary:
+    done: list[str] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    failed: dict[str, str] = field(default_factory=dict)
+
+
+def list_photo_cases(bench_dir, methods, shard=(0, 1)) -> list[PhotoCase]:
+    """Every (photo, method) case, in manifest x method order, then sharded."""
+    bench = Path(bench_dir)
+    manifest = read_photo_manifest(bench)
+    cases = [PhotoCase(p["id"], bench / p["case"], m) for p in manifest["photos"] for m in methods]
+    i, n = shard
+    return cases[i::n]
+
+
+def _write_json(path: Path, data) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(data, indent=2, default=_plain))
+    os.replace(tmp, path)
+
+
+def _plain(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def _recovered(fit: dict) -> RecoveredLight:
+    for key in ("radiance", "emitter_kind", "light_from_camera"):
+        if key not in fit:
+            raise RoomlightError(f"the fit returned no {key!r}")
+    depth = fit.get("depth")
+    return RecoveredLight(np.asarray(fit["radiance"], np.float32), None if depth is None else np.asarray(depth, np.float32),
+                          str(fit["emitter_kind"]), np.asarray(fit["light_from_camera"], np.float64))
+
+
+def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, eval_spp: int = DEFAULT_EVAL_SPP,
+                   fit=None, progress: bool = False, overrides: dict | None = None) -> dict:
+    """Fit (or take the oracle), score and write one case; returns its ``result.json`` record.
+
+    ``fit``: the fitting function, :func:`~roomlight.photobench.adapter.fit_photo_case` by default;
+    ``overrides``: fit-photo settings replacing the preset's.
+    """
+    from roomlight.io import write_panorama
+    from roomlight.photobench.case import write_rgb_exr
+
+    fit = fit or fit_photo_case
+    cdir = case.directory(out_dir)
+    cdir.mkdir(parents=True, exist_ok=True)
+    truth = load_truth(case.case_dir)
+    t0 = time.perf_counter()
+    materials = None
+    if case.method in ORACLES:
+        light = oracle_light(case.case_dir, ORACLES[case.method], truth)
+        fit_seconds = 0.0
+    else:
+        out = fit(case.case_dir, case.method, preset, cdir / "fit", model=model, progress=progress,
+                  overrides=overrides)
+        light = _recovered(out)
+        materials = material_errors(truth.materials, out.get("materials") or {})
+        fit_seconds = float(out.get("seconds", time.perf_counter() - t0))
+    wall = time.perf_counter() - t0
+    write_panorama(cdir / "recovered.exr", (light.radiance, light.depth), half=False,
+                   metadata={"emitter_kind": light.kind, "light_from_camera": np.asarray(light.light_from_camera).tolist()})
+    t1 = time.perf_counter()
+    renders: dict = {}
+    scores = score_light(truth, light, eval_spp, renders=renders, given_depth=case.method not in ORACLES)
+    for m, img in renders.items():
+        write_rgb_exr(cdir / f"probes_{m}.exr", img)
+    record = {"photo": case.photo, "case_dir": str(Path(case.case_dir).resolve()), "method": case.method,
+              "emitter_kind": light.kind, "probes": scores, "materials": materials,
+              "depth_factors": truth.depth_factors, "fit_seconds": fit_seconds, "wall_seconds": wall,
+              "eval_seconds": time.perf_counter() - t1, "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH,
+              "recovered_resolution": list(light.radiance.shape[:2]),
+              "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
+                        **({"fit": "fit"} if case.method not in ORACLES else {})}}
+    (cdir / "error.json").unlink(missing_ok=True)
+    _write_json(cdir / RESULT, record)
+    return record
+
+
+def _check_run_file(out: Path, settings: dict) -> None:
+    f = out / RUN_FILE
+    if f.is_file():
+        try:
+            old = json.loads(f.read_text())
+        except ValueError:
+            old = None
+        if isinstance(old, dict):
+            for key in ("preset", "overrides", "eval_spp", "max_depth"):
+                if key in old and old[key] != settings[key]:
+                    raise RoomlightError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
+                                         f"now {settings[key]!r}); use another --out, or delete it to start over")
+    _write_json(f, settings)
+
+
+def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
+                        eval_spp: int = DEFAULT_EVAL_SPP, shard=(0, 1), progress: bool = True, fit=None,
+                        model_name: str | None = None, overrides: dict | None = None) -> PhotoRunSummary:
+    """Run (a shard of) the photo benchmark; see the module docstring.
+
+    Args:
+        bench_dir: a folder written by ``roomlight bench make-photos``; out_dir: the results folder.
+        methods: method names (default :data:`DEFAULT_METHODS`); see :data:`KNOWN_METHODS`.
+        preset: the fit-photo preset; overrides: settings replacing the preset's (``--set``);
+            model: the prior for the prior methods.
+        fit: the fitting function (default: :func:`~roomlight.photobench.adapter.fit_photo_case`).
+        model_name: where the prior came from, recorded in ``run.json``.
+    """
+    methods = tuple(methods) if methods else DEFAULT_METHODS
+    bad = [m for m in methods if m not in KNOWN_METHODS]
+    if bad:
+        raise RoomlightError(f"--methods: unknown method(s) {', '.join(bad)}; choose from {', '.join(KNOWN_METHODS)}")
+    if eval_spp < 1:
+        raise RoomlightError(f"--eval-spp must be at least 1, got {eval_spp}")
+    bench = Path(bench_dir).resolve()
+    cases = list_photo_cases(bench, methods, shard)  # a broken benchmark is refused before anything is written
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    settings = {"bench": str(bench), "kind": "photos", "methods": list(methods), "preset": preset,
+                "overrides": dict(overrides or {}), "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH}
+    if model_name is not None:
+        settings["model"] = str(model_name)
+    _check_run_file(out, settings)
+    summary = PhotoRunSummary()
+    todo = []
+    for c in cases:
+        (summary.skipped if (c.directory(out) / RESULT).is_file() else todo).append(c)
+    summary.skipped = [f"{c.photo}/{c.method}" for c in summary.skipped]
+    bar = None
+    if progress and todo:
+        from roomlight.progress import progress_bar
+
+        bar = progress_bar(total=len(todo), desc="run-photos", unit="case")
+    try:
+        for c in todo:
+            name = f"{c.photo}/{c.method}"
+            try:
+                run_photo_case(c, out, preset, model, eval_spp, fit, progress=False, overrides=overrides)
+                summary.done.append(name)
+            except KeyboardInterrupt:
+                raise
+            except Exception as exc:  # one failed case must not stop a long run
+                cdir = c.directory(out)
+                cdir.mkdir(parents=True, exist_ok=True)
+                _write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
+                                                  "traceback": traceback.format_exc()})
+                summary.failed[name] = f"{type(exc).__name__}: {exc}"
+                if bar is not None:
+                    bar.write(f"run-photos: {name} failed: {exc}")
+            if bar is not None:
+                bar.set_postfix_str(name)
+                bar.update()
+    finally:
+        if bar is not None:
+            bar.close()
+    return summary
