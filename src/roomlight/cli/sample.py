@@ -116,6 +116,7 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
     contrast = peak_contrast(rad)
     (out / "latents.json").write_text(json.dumps({"seed": seed, "temperature": temperature, "z": z.tolist(),
                                                   "peak_contrast": contrast.tolist()}) + "\n")
-    click.echo(f"brightest pixel / median luminance: median {contrast.median():.1f}x "
+    # quantile(0.5), not median(): torch takes the lower middle value of an even count.
+    click.echo(f"brightest pixel / median luminance: median {float(contrast.double().quantile(0.5)):.1f}x "
                f"(range {contrast.min():.1f}-{contrast.max():.1f}x)")
     click.echo(f"{count} samples -> {out} (figure: {out / 'samples.png'})")
