@@ -70,7 +70,7 @@ def _mean_emission(m) -> float:
 
 
 def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | None = None,
-                integrator: dict | None = None):
+                integrator: dict | None = None, extra: dict | None = None):
     """Instantiate the room as a ``mi.Scene`` with a ``path`` integrator.
 
     Args:
@@ -78,6 +78,8 @@ def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | 
         max_depth: Mitsuba path length limit (see :data:`DEFAULT_MAX_DEPTH`).
         rr_depth: depth at which Russian roulette starts (default: ``max_depth``, i.e. none).
         integrator: a full integrator dict overriding the two settings above.
+        extra: more scene entries by id (Mitsuba dicts or objects: probe spheres, a sensor) placed
+            in the room as they are; an id the room uses itself is refused.
     Returns:
         ``mi.Scene`` (no sensor: render it with :mod:`roomlight.synth.camera`).
     """
@@ -115,5 +117,9 @@ def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | 
         emitter = portal_emitter(mi, w, room.sky, powers[f"portal_{k}"] + floor)
         portals.append(emitter)
         entries[f"portal_{k}"] = _mesh(mi, f"portal_{k}", builder.build(), black, emitter)
+    for key, value in (extra or {}).items():
+        if key in entries:
+            raise KeyError(f"room {room.seed}: extra scene entry {key!r} clashes with the room's own")
+        entries[key] = value
     scene = mi.load_dict(entries)
     return scene
