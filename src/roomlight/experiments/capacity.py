@@ -50,15 +50,12 @@ import torch
 
 from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
+from roomlight.experiments.capacity_record import KIND_LABELS, KINDS, RESULT, VIEW_TAGS, score_renders
+from roomlight.experiments.files import atomic_json, atomic_npz
 from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout
 
-__all__ = ["CapacityConfig", "KINDS", "KIND_LABELS", "run_capacity", "run_room", "room_name", "atomic_json"]
+__all__ = ["CapacityConfig", "run_capacity", "run_room", "room_name"]
 
-#: The emitters compared, in table order.
-KINDS = ("mesh", "envmap", "sphere")
-KIND_LABELS = {"mesh": "2.5D area light", "envmap": "Environment map", "sphere": "Sphere proxy"}
-VIEW_TAGS = ("A", "B", "M")
-RESULT = "result.json"
 _SALT = 0x43415041  # "CAPA": the placement's random stream, apart from the room generator's
 
 
@@ -105,20 +102,6 @@ class CapacityConfig(StrictConfig):
 
 def room_name(seed) -> str:
     return seed if isinstance(seed, str) else f"room-{int(seed):06d}"
-
-
-def atomic_json(path: Path, data) -> None:
-    """Write JSON through a temporary file and a rename (a kill never leaves half a file)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    os.replace(tmp, path)
-
-
-def _atomic_npz(path: Path, **arrays) -> None:
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, path)
 
 
 # --------------------------------------------------------------------------------------------
@@ -319,7 +302,7 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
                     pair_imgs[f"{kind}_{VIEW_TAGS[vi]}"] = _render(mi, scene, pair, cfg.emitter_spp, seeds["emit"] + 999)
         del em
 
-    record = _score(gt, emit, emit2, masks, cfg)
+    record = score_renders(gt, emit, emit2, masks, cfg.materials)
     record.update({"name": out.name, "seed": getattr(room, "seed", None), "room": _summary(room), "plan": _plan(room),
                    "exposure_factor": factor, "layout": layout.to_dict(), "sphere_radii": radii,
                    "pair_material": pair_material if pair is not None else None,
@@ -327,30 +310,9 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
                    "settings": cfg.scene_settings()})
     arrays = {"gt": gt, "emit": emit, "emit2": emit2, "masks": masks}
     arrays.update({f"pair_{k}": v for k, v in pair_imgs.items()})
-    _atomic_npz(out / "renders.npz", **arrays)
+    atomic_npz(out / "renders.npz", **arrays)
     atomic_json(out / RESULT, record)
     return record
-
-
-def _rmse(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:
-    from roomlight.bench.metrics import rmse_hdr
-
-    return rmse_hdr(a, b, mask)
-
-
-def _score(gt, emit, emit2, masks, cfg: CapacityConfig) -> dict:
-    """RMSE per material: noise floor per probe; per emitter, per viewpoint, per probe."""
-    rmse: dict = {}
-    P = masks.shape[0]
-    for mi_idx, material in enumerate(cfg.materials):
-        ref = gt[mi_idx, 0]
-        r = {"noise_floor": [_rmse(gt[mi_idx, 1, k], ref[k], masks[k]) for k in range(P)],
-             "mesh_noise": [_rmse(emit2[mi_idx, k], emit[mi_idx, 0, 2, k], masks[k]) for k in range(P)]}
-        for ki, kind in enumerate(KINDS):
-            r[kind] = [[_rmse(emit[mi_idx, ki, vi, k], ref[k], masks[k]) for k in range(P)]
-                       for vi in range(emit.shape[2])]
-        rmse[material] = r
-    return {"rmse": rmse}
 
 
 def _plan(room) -> dict:

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.color import MIDDLE_GREY, log_average_np, to_display
+from roomlight.experiments.capacity_record import KINDS, MATERIAL_LABELS, PAPER_RATIO, VIEW_TAGS
 
 __all__ = ["write_capacity_figures"]
 
@@ -77,8 +78,6 @@ def _probe_figure(record: dict, renders, material: str, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from roomlight.experiments.capacity import KINDS, VIEW_TAGS
-
     m = record["settings"]["materials"].index(material)
     gt, emit, masks = renders["gt"][m, 0], renders["emit"][m], renders["masks"]
     P, V = gt.shape[0], emit.shape[1]
@@ -115,8 +114,6 @@ def _motivation_figure(record: dict, renders, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from roomlight.experiments.capacity import VIEW_TAGS
-
     gt = renders["pair_gt"]
     expo = _exposure(gt)
     fig, axes = plt.subplots(len(VIEW_TAGS), 3, figsize=(3 * 3.6, len(VIEW_TAGS) * 2.0))
@@ -145,7 +142,6 @@ def _ratio_figure(summary: dict, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from roomlight.experiments.capacity_report import MATERIAL_LABELS, PAPER_RATIO
 
     mats = summary["materials"]
     fig, ax = plt.subplots(figsize=(2.2 * len(mats) + 2, 3.4))

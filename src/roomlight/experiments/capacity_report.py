@@ -14,34 +14,15 @@ ground-truth renders. Over rooms:
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
 from roomlight.bench.paired import RESAMPLES, bootstrap_mean_interval
+from roomlight.experiments.capacity_record import KIND_LABELS, KINDS, MATERIAL_LABELS, PAPER_RATIO, room_cells
 
-__all__ = ["room_cells", "summarize_capacity", "capacity_markdown", "write_capacity_report", "PAPER_RATIO"]
+__all__ = ["summarize_capacity", "capacity_markdown", "write_capacity_report"]
 
-#: The paper's statement: the 2.5D light's RMSE is 2x to 5x below the environment map's.
-PAPER_RATIO = (2.0, 5.0)
-MATERIAL_LABELS = {"diffuse": "Diffuse", "matte": "Matte silver", "mirror": "Mirror", "glossy": "Glossy",
-                   "white": "White"}
-
-
-def room_cells(record: dict) -> dict:
-    """``{material: {"noise_floor": x, "mesh_noise": x, kind: [min, max], kind + "_mean": x}}`` of one room."""
-    from roomlight.experiments.capacity import KINDS
-
-    out = {}
-    for material, r in record["rmse"].items():
-        cell = {"noise_floor": float(np.mean(r["noise_floor"])), "mesh_noise": float(np.mean(r["mesh_noise"]))}
-        for kind in KINDS:
-            per_view = np.asarray(r[kind], np.float64).mean(axis=1)  # average over probes
-            cell[kind] = [float(per_view.min()), float(per_view.max())]
-            cell[kind + "_mean"] = float(per_view.mean())
-        out[material] = cell
-    return out
 
 
 def _interval(values) -> dict:
@@ -63,8 +44,6 @@ def _ratio_stats(ratios) -> dict:
 
 def summarize_capacity(records: list[dict]) -> dict:
     """The summary of a run: the one-room cells (first record) and the aggregate over all rooms."""
-    from roomlight.experiments.capacity import KINDS
-
     cells = [room_cells(r) for r in records]
     materials = list(records[0]["rmse"])
     agg: dict = {}
@@ -118,8 +97,6 @@ def capacity_markdown(summary: dict, settings: dict, wall_seconds: float | None 
                       skipped: dict | None = None) -> str:
     """The report: settings, the one-room table in the paper's layout, the aggregate with
     intervals, the ratios and the verdict."""
-    from roomlight.experiments.capacity import KIND_LABELS, KINDS
-
     mats = summary["materials"]
     head = "| Emitter | " + " | ".join(MATERIAL_LABELS.get(m, m) for m in mats) + " |"
     rule = "|---|" + "|".join([":---:"] * len(mats)) + "|"
@@ -185,8 +162,8 @@ def capacity_markdown(summary: dict, settings: dict, wall_seconds: float | None 
 def write_capacity_report(out, records: list[dict], cfg, skipped=None, wall_seconds=None,
                           resumed_rooms: int = 0) -> dict:
     """Write ``capacity.md``, ``capacity.json`` and the figures into ``out``; returns the summary."""
-    from roomlight.experiments.capacity import atomic_json
     from roomlight.experiments.capacity_figures import write_capacity_figures
+    from roomlight.experiments.files import atomic_json, atomic_text
 
     out = Path(out)
     summary = summarize_capacity(records)
@@ -195,22 +172,11 @@ def write_capacity_report(out, records: list[dict], cfg, skipped=None, wall_seco
     doc = {"settings": settings, "summary": summary, "rooms": records, "skipped": skipped or {},
            "wall_seconds": wall_seconds, "rooms_reused": resumed_rooms,
            "room_seconds": sum(r.get("seconds", 0.0) for r in records)}
-    atomic_json(out / "capacity.json", _finite(doc))
+    atomic_json(out / "capacity.json", doc)
     figures = write_capacity_figures(out, records, summary)
     text = capacity_markdown(summary, settings, wall_seconds, skipped)
-    tmp = out / ".capacity.md.tmp"
-    tmp.write_text(text)
-    tmp.replace(out / "capacity.md")
+    atomic_text(out / "capacity.md", text)
     summary["figures"] = [str(p) for p in figures]
     summary["markdown"] = text
     return summary
 
-
-def _finite(obj):
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    return obj
