@@ -316,10 +316,12 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
 
 
 def _plan(room) -> dict:
-    """Top-view footprints for the figures: floor cells and furniture boxes (x0, z0, x1, z1[, kind])."""
+    """Top-view footprints for the figures: floor cells (x0, z0, x1, z1) and furniture boxes
+    (x0, z0, x1, z1, kind, whether it emits light)."""
+    emitting = set(room.emitters())
     return {"cells": [[float(v) for v in c] for c in room.cells],
-            "furniture": [[float(f.lo[0]), float(f.lo[2]), float(f.hi[0]), float(f.hi[2]), str(f.kind)]
-                          for f in room.furniture]}
+            "furniture": [[float(f.lo[0]), float(f.lo[2]), float(f.hi[0]), float(f.hi[2]), str(f.kind),
+                           any(p.material in emitting for p in f.parts)] for f in room.furniture]}
 
 
 def _summary(room) -> dict:

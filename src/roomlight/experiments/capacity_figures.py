@@ -43,10 +43,13 @@ def _top_view(ax, record: dict) -> None:
     plan = record.get("plan") or {}
     for x0, z0, x1, z1 in plan.get("cells", []):
         ax.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, fill=False, lw=1.2, color="0.3"))
-    for x0, z0, x1, z1, kind in plan.get("furniture", []):
-        light = kind in ("wall_light", "ceiling_panels", "lamp") or "light" in kind
-        ax.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, color="gold" if light else "0.8",
-                               alpha=0.8 if light else 0.6, lw=0))
+    for x0, z0, x1, z1, _kind, light in plan.get("furniture", []):
+        if light:  # drawn at least 8 cm wide, so a wall light shows
+            cx, cz = 0.5 * (x0 + x1), 0.5 * (z0 + z1)
+            hx, hz = max(0.5 * (x1 - x0), 0.04), max(0.5 * (z1 - z0), 0.04)
+            ax.add_patch(Rectangle((cx - hx, cz - hz), 2 * hx, 2 * hz, color="gold", alpha=0.9, lw=0))
+        else:
+            ax.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, color="0.8", alpha=0.6, lw=0))
     lay = record["layout"]
     probes = np.asarray(lay["probes"])
     views = np.asarray(lay["viewpoints"])
@@ -61,7 +64,7 @@ def _top_view(ax, record: dict) -> None:
     ax.invert_yaxis()
     ax.set_xlabel("x (m)")
     ax.set_ylabel("z (m)")
-    ax.set_title("top view", fontsize=9)
+    ax.set_title("top view (gold: light fixtures)", fontsize=9)
     ax.legend(fontsize=7, loc="best")
     ax.autoscale_view()
 

@@ -94,7 +94,7 @@ def _verdict(summary: dict) -> list[str]:
 
 
 def capacity_markdown(summary: dict, settings: dict, wall_seconds: float | None = None,
-                      skipped: dict | None = None) -> str:
+                      skipped: dict | None = None, room_seconds: float | None = None, reused: int = 0) -> str:
     """The report: settings, the one-room table in the paper's layout, the aggregate with
     intervals, the ratios and the verdict."""
     mats = summary["materials"]
@@ -104,7 +104,7 @@ def capacity_markdown(summary: dict, settings: dict, wall_seconds: float | None 
     label = {k: KIND_LABELS[k] + (f", {H} × {2 * H}" if k == "mesh" else "") for k in KINDS}
     n = len(summary["rooms"])
     lines = ["# Capacity of a single 2.5D area light", "",
-             f"{n} procedural room{'s' if n != 1 else ''} ({', '.join(summary['rooms'])}); probes of radius "
+             f"{n} room{'s' if n != 1 else ''} ({', '.join(summary['rooms'])}); probes of radius "
              f"{settings['probe_radius']} m seen at {settings['image_size']} × {settings['image_size']} pixels; "
              f"panoramas {H} × {2 * H} at {settings['pano_spp']} spp; ground truth {settings['gt_spp']} spp, "
              f"emitter renders {settings['emitter_spp']} spp; panorama paths {settings['max_depth']} bounces, "
@@ -113,14 +113,19 @@ def capacity_markdown(summary: dict, settings: dict, wall_seconds: float | None 
              "log-average luminance 1. Cells: min–max over the three capture points (centre of A, centre of "
              "B, midpoint) of the RMSE averaged over the three probes.", ""]
     if wall_seconds is not None:
-        lines += [f"Wall time of this run: {wall_seconds / 60:.1f} min.", ""]
+        text = f"Wall time of this call: {wall_seconds / 60:.1f} min"
+        if reused:
+            text += f" ({reused} room{'s' if reused != 1 else ''} measured earlier and reused)"
+        if room_seconds is not None:
+            text += f"; the rooms' own measuring times add up to {room_seconds / 60:.1f} min"
+        lines += [text + ".", ""]
     one = summary["one_room"]["cells"]
     lines += [f"## One room ({summary['one_room']['name']})", "", head, rule,
               "| Noise floor | " + " | ".join(_f(one[m]["noise_floor"]) for m in mats) + " |"]
     for kind in KINDS:
         lines.append(f"| {label[kind]} | " + " | ".join(f"{_f(one[m][kind][0])}–{_f(one[m][kind][1])}" for m in mats)
                      + " |")
-    lines += ["", f"## Over {n} rooms", "",
+    lines += ["", f"## Over {n} room{'s' if n != 1 else ''}", "",
               "Mean over rooms of each end of the min–max cell, with its 95 % bootstrap interval "
               f"({RESAMPLES} resamples of the rooms).", "", head, rule]
     agg = summary["aggregate"]
@@ -174,7 +179,7 @@ def write_capacity_report(out, records: list[dict], cfg, skipped=None, wall_seco
            "room_seconds": sum(r.get("seconds", 0.0) for r in records)}
     atomic_json(out / "capacity.json", doc)
     figures = write_capacity_figures(out, records, summary)
-    text = capacity_markdown(summary, settings, wall_seconds, skipped)
+    text = capacity_markdown(summary, settings, wall_seconds, skipped, doc["room_seconds"], resumed_rooms)
     atomic_text(out / "capacity.md", text)
     summary["figures"] = [str(p) for p in figures]
     summary["markdown"] = text
