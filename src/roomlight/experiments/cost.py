@@ -236,9 +236,10 @@ def run_cost(out_dir, cfg: CostConfig = CostConfig(), device: str = "auto") -> d
         device = "cuda" if torch.cuda.is_available() else "cpu"
     if device == "cuda" and not torch.cuda.is_available():
         raise RoomlightError("cost: --device cuda, but torch sees no usable CUDA device")
-    if device == "cpu":
-        # Mitsuba on the same side as torch: the CPU backend even where a GPU exists
-        os.environ.setdefault("ROOMLIGHT_VARIANT", "llvm_ad_rgb")
+    from roomlight.render.variant import ensure_variant
+
+    # Mitsuba on the same side as torch: its CPU backend even where a GPU exists, and the reverse
+    ensure_variant("llvm_ad_rgb" if device == "cpu" else "cuda_ad_rgb")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
