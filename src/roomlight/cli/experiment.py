@@ -64,11 +64,11 @@ def capacity(out_dir, rooms, seed, pano_height, pano_spp, image_size, spp, mater
     cfg = CapacityConfig().override(**changes)
     room_list = None
     if wall_light_room:
-        from roomlight.experiments.layout import Caster, LayoutConfig, wall_light_layout, wall_light_room as make
+        from roomlight.experiments.layout import Caster, wall_light_layout, wall_light_room as make
         from roomlight.synth.scene import build_scene
 
         room = make()
-        layout = wall_light_layout(room, Caster(build_scene(room)), LayoutConfig(probe_radius=cfg.probe_radius))
+        layout = wall_light_layout(room, Caster(build_scene(room)), cfg.layout_config())
         room_list = [("wall-light", room, layout)]
     summary = run_capacity(out_dir, cfg, rooms=room_list, progress=not quiet)
     click.echo(summary["markdown"])

@@ -52,7 +52,7 @@ from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
 from roomlight.experiments.capacity_record import KIND_LABELS, KINDS, RESULT, VIEW_TAGS, score_renders
 from roomlight.experiments.files import atomic_json, atomic_npz
-from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout
+from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout, sphere_proxy_radius
 
 __all__ = ["CapacityConfig", "run_capacity", "run_room", "room_name"]
 
@@ -91,6 +91,10 @@ class CapacityConfig(StrictConfig):
                                  f"choose from {', '.join(MATERIALS)}")
         if not self.probe_radius > 0:
             raise RoomlightError(f"capacity: probe_radius must be > 0, got {self.probe_radius}")
+
+    def layout_config(self) -> LayoutConfig:
+        """The probe layout's settings that follow from these (probe size, sphere-proxy margin)."""
+        return LayoutConfig(probe_radius=self.probe_radius, sphere_margin=self.sphere_margin)
 
     def scene_settings(self) -> dict:
         """The settings a room's numbers depend on (all but ``rooms``): finished rooms are reused
@@ -159,12 +163,6 @@ def probe_masks(mi, scene, sensor, probe_ids, supersample: int = 4) -> np.ndarra
     return out
 
 
-def _sphere_radius(layout: ProbeLayout, viewpoint: np.ndarray, margin: float) -> float:
-    """Smallest sphere around ``viewpoint`` holding every probe, enlarged by ``margin``."""
-    reach = max(float(np.linalg.norm(p - viewpoint)) + layout.radius for p in layout.probes)
-    return reach * (1.0 + margin)
-
-
 class _Emitters:
     """The three emitter scenes of one material (probes in world coordinates), moved between
     viewpoints by rewriting the emitter's texture and vertices (offset by the viewpoint)."""
@@ -229,7 +227,7 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
     room_scene = build_scene(room, max_depth=cfg.max_depth)
     if layout is None:
         rng = np.random.default_rng([int(getattr(room, "seed", 0)), _SALT, cfg.seed])
-        layout = place_layout(room, Caster(room_scene), rng, LayoutConfig(probe_radius=cfg.probe_radius))
+        layout = place_layout(room, Caster(room_scene), rng, cfg.layout_config())
     atomic_json(out / "layout.json", layout.to_dict())
 
     # 1. panoramas at the three viewpoints (probes absent), world-aligned (yaw 0)
@@ -265,7 +263,7 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
     pair_imgs = {}
     masks = None
     probe_ids = [f"probe_{k}" for k in range(P)]
-    radii = [_sphere_radius(layout, v, cfg.sphere_margin) for v in layout.viewpoints]
+    radii = [sphere_proxy_radius(layout.probes, layout.radius, v, cfg.sphere_margin) for v in layout.viewpoints]
     maps = [(torch.from_numpy(r * scale).float(), torch.from_numpy(d).float()) for r, d in panos]
     pair_material = "matte" if "matte" in cfg.materials else cfg.materials[0]
     for mi_idx, material in enumerate(cfg.materials):

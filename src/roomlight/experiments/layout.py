@@ -12,7 +12,9 @@ Everything is decided by ray casting against the room's Mitsuba scene (probes ab
   viewpoint would sit behind that light's surface, which no panorama-based light can fix);
 - a probe's camera looks at it from ``camera_distance`` (5 probe radii by default), 15 degrees
   above the horizon, from the first of 16 azimuths whose whole line of sight to the sphere is
-  clear; the room's geometry decides the rest (the masks of
+  clear and which lies inside every emitter the probes are relit by: seen from every capture
+  point (so inside each 2.5D light) and inside each capture point's sphere proxy (a camera
+  outside an emitter would look at its back); the room's geometry decides the rest (the masks of
   :mod:`roomlight.experiments.capacity` keep only pixels where the probe is the first hit).
 
 Positions are world coordinates in metres (y up). :func:`wall_light_room` is a fixed room with
@@ -29,7 +31,7 @@ import numpy as np
 from roomlight.errors import RoomlightError
 
 __all__ = ["ProbeLayout", "LayoutConfig", "Caster", "place_layout", "cameras_for", "pair_camera",
-           "wall_light_room", "wall_light_layout", "fibonacci_directions"]
+           "sphere_proxy_radius", "wall_light_room", "wall_light_layout", "fibonacci_directions"]
 
 
 @dataclass(frozen=True)
@@ -43,6 +45,7 @@ class LayoutConfig:
     camera_distance: float = 0.6     #: camera to probe centre
     camera_elevation: float = 15.0   #: camera height above the probe, as an angle
     camera_fov: float = 30.0         #: horizontal field of view of the probe cameras
+    sphere_margin: float = 0.2       #: the sphere proxy's enlargement (cameras must fit inside it)
     height_range: tuple[float, float] = (0.5, 1.7)  #: probe centre heights above the floor
     tries: int = 400                 #: candidate positions drawn before a room is given up
 
@@ -187,6 +190,26 @@ def place_layout(room, caster: Caster, rng: np.random.Generator, cfg: LayoutConf
                          f"({len(free)} free candidates of {cfg.tries})")
 
 
+def sphere_proxy_radius(probes, radius: float, viewpoint, margin: float) -> float:
+    """Radius of the sphere proxy at ``viewpoint``: the smallest sphere around it holding every
+    probe (centres ``probes`` (P, 3), radius ``radius``), enlarged by ``margin`` (the benchmark's
+    rule for its sphere-proxy baseline)."""
+    v = np.asarray(viewpoint, np.float64)
+    return max(float(np.linalg.norm(np.asarray(p) - v)) + radius for p in probes) * (1.0 + margin)
+
+
+def _inside_emitters(caster: Caster, layout: ProbeLayout, origin, margin: float | None) -> bool:
+    """``origin`` is seen from every capture point (inside each 2.5D light) and, unless ``margin``
+    is None, 5 cm or more inside each capture point's sphere proxy."""
+    for v in layout.viewpoints:
+        if not caster.sees(v, origin):
+            return False
+        if margin is not None and np.linalg.norm(origin - v) > sphere_proxy_radius(
+                layout.probes, layout.radius, v, margin) - 0.05:
+            return False
+    return True
+
+
 def _look_from(azimuth: float, elevation_deg: float) -> np.ndarray:
     e = math.radians(elevation_deg)
     return np.array([math.cos(e) * math.sin(azimuth), math.sin(e), -math.cos(e) * math.cos(azimuth)])
@@ -226,7 +249,8 @@ def cameras_for(layout: ProbeLayout, caster: Caster, cfg: LayoutConfig = LayoutC
             o = p + cfg.camera_distance * _look_from(az, cfg.camera_elevation)
             if caster.clearance(o, 64) < 0.08:
                 continue
-            if _clear_view(caster, o, p, layout.radius, others, layout.radius):
+            if (_clear_view(caster, o, p, layout.radius, others, layout.radius)
+                    and _inside_emitters(caster, layout, o, cfg.sphere_margin)):
                 found = (o, p.copy())
                 break
         if found is None:
@@ -238,7 +262,7 @@ def cameras_for(layout: ProbeLayout, caster: Caster, cfg: LayoutConfig = LayoutC
 def pair_camera(layout: ProbeLayout, caster: Caster) -> tuple | None:
     """A camera that sees probes A and B side by side: on either side of the segment AB, 20
     degrees above it, far enough for both to fit a 60 degree field of view (the nearest that
-    fits and sees both is taken), or None."""
+    fits, sees both and is seen from every capture point is taken), or None."""
     a, b = layout.probes[0], layout.probes[1]
     m = 0.5 * (a + b)
     ab = b - a
@@ -257,7 +281,8 @@ def pair_camera(layout: ProbeLayout, caster: Caster) -> tuple | None:
             o = m + d * (sign * math.cos(e) * perp + math.sin(e) * np.array([0.0, 1.0, 0.0]))
             if caster.clearance(o, 64) < 0.1:
                 continue
-            if all(_clear_view(caster, o, p, layout.radius, [], 0.0) for p in (a, b)):
+            if (all(_clear_view(caster, o, p, layout.radius, [], 0.0) for p in (a, b))
+                    and _inside_emitters(caster, layout, o, None)):  # relit by the 2.5D light and env map only
                 return o, m.copy(), fov
     return None
 
