@@ -6,7 +6,13 @@ from pathlib import Path
 
 import click
 
-from roomlight.cli.common import RoomlightGroup, fail, parse_sets, sets_option
+from roomlight.cli.common import RoomlightGroup, default_of, fail, parse_sets
+from roomlight.experiments.capacity import CapacityConfig as _Cap
+
+
+def _sets(what: str, example: str):
+    return click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
+                        help=f"Override any {what} field (repeatable; docs/experiments.md), e.g. --set {example}.")
 
 
 def _csv(value):
@@ -31,20 +37,23 @@ def command():
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for the tables, figures and per-room renders; rerunning continues it.")
 @click.option("--rooms", type=click.IntRange(min=1), default=None,
-              help="Procedural rooms to measure (rooms without space for the probes are skipped) [default: 10].")
-@click.option("--seed", type=int, default=None, help="First room seed; renders are seeded from it [default: 0].")
+              help="Procedural rooms to measure (rooms without space for the probes are skipped) "
+                   f"{default_of(_Cap, 'rooms')}.")
+@click.option("--seed", type=int, default=None,
+              help=f"First room seed; renders are seeded from it {default_of(_Cap, 'seed')}.")
 @click.option("--pano-res", "pano_height", type=click.IntRange(min=4), default=None,
-              help="Panorama / emitter height H, width 2H [default: 128, the paper's 128x256].")
+              help=f"Panorama / emitter height H, width 2H (the paper's: 128) {default_of(_Cap, 'pano_height')}.")
 @click.option("--pano-spp", type=click.IntRange(min=1), default=None,
-              help="Samples per pixel of the panoramas, a perfect square [default: 256].")
+              help=f"Samples per pixel of the panoramas, a perfect square {default_of(_Cap, 'pano_spp')}.")
 @click.option("--image-size", type=click.IntRange(min=4), default=None,
-              help="Probe images are N x N pixels [default: 64].")
+              help=f"Probe images are N x N pixels {default_of(_Cap, 'image_size')}.")
 @click.option("--spp", type=click.IntRange(min=1), default=None,
-              help="Samples per pixel of every probe render, ground truth and emitters [default: 1024].")
-@click.option("--materials", default=None, help="Comma-separated probe materials [default: diffuse,matte,mirror].")
+              help=f"Samples per pixel of every probe render, ground truth and emitters {default_of(_Cap, 'gt_spp')}.")
+@click.option("--materials", default=None,
+              help=f"Comma-separated probe materials [default: {','.join(_Cap.materials)}].")
 @click.option("--wall-light-room", is_flag=True,
               help="Measure the fixed test room instead: probes next to a wall light (the near-field case).")
-@sets_option("CapacityConfig (docs/experiments.md)")
+@_sets("CapacityConfig", "probe_radius=0.1")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def capacity(out_dir, rooms, seed, pano_height, pano_spp, image_size, spp, materials, wall_light_room, sets, quiet):
     """Capacity of a single 2.5D area light (supplementary table): probe spheres in procedural
@@ -87,7 +96,7 @@ def capacity(out_dir, rooms, seed, pano_height, pano_spp, image_size, spp, mater
 @click.option("--rows", default=None,
               help="Comma-separated rows [default: full,no-peak,no-gradient,no-adagn,no-latitude,none].")
 @click.option("--seed", type=int, default=None, help="Seed of weights, data order, rooms and placements.")
-@sets_option("AblationConfig (docs/experiments.md)")
+@_sets("AblationConfig", "fit_steps=1500")
 @click.option("--quiet", is_flag=True, help="No progress bars.")
 def ablate(out_dir, study, data_dir, steps, rows, seed, sets, quiet):
     """The ablation table: the full prior and five ablations (w/o peak loss, w/o gradient terms,
@@ -120,7 +129,7 @@ def ablate(out_dir, study, data_dir, steps, rows, seed, sets, quiet):
 @click.option("--device", type=click.Choice(["auto", "cpu", "cuda"]), default="auto", show_default=True,
               help="auto: the GPU when one is usable.")
 @click.option("--methods", default=None, help="Comma-separated fitting methods [default: all].")
-@sets_option("CostConfig (docs/experiments.md)")
+@_sets("CostConfig", "train_batch=32")
 def cost(out_dir, quick, paper, model_preset, device, methods, sets):
     """The cost table on this machine: parameters, training throughput (and the paper's schedule
     in hours at that rate), decode time at the model's resolution, fit time per case for each
