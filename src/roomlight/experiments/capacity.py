@@ -252,20 +252,14 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
 
     n = cfg.image_size
     sensors = [_sensor(mi, o, t, layout.fov, n, n) for o, t in layout.cameras]
-    pair = None
-    if layout.pair is not None:
-        o, t, fov = layout.pair
-        pair = _sensor(mi, o, t, fov, 2 * n, n)
     P, V, M = len(layout.probes), len(layout.viewpoints), len(cfg.materials)
     gt = np.zeros((M, 2, P, n, n, 3), np.float32)
     emit = np.zeros((M, len(KINDS), V, P, n, n, 3), np.float32)
     emit2 = np.zeros((M, P, n, n, 3), np.float32)
-    pair_imgs = {}
     masks = None
     probe_ids = [f"probe_{k}" for k in range(P)]
     radii = [sphere_proxy_radius(layout.probes, layout.radius, v, cfg.sphere_margin) for v in layout.viewpoints]
     maps = [(torch.from_numpy(r * scale).float(), torch.from_numpy(d).float()) for r, d in panos]
-    pair_material = "matte" if "matte" in cfg.materials else cfg.materials[0]
     for mi_idx, material in enumerate(cfg.materials):
         # 2. ground truth: the room with the probes, one bounce more than the panoramas
         say(f"{material}: ground truth")
@@ -279,8 +273,6 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
         for k, s in enumerate(sensors):
             for j, key in enumerate(("gt0", "gt1")):
                 gt[mi_idx, j, k] = _render(mi, gt_scene, s, cfg.gt_spp, seeds[key] + 17 * k + 1000 * mi_idx) * scale
-        if pair is not None and material == pair_material:
-            pair_imgs["gt"] = _render(mi, gt_scene, pair, cfg.gt_spp, seeds["gt0"] + 999) * scale
         del gt_scene
         # 3. the same probes lit by each emitter at each viewpoint
         em = _Emitters(layout, material, (H, 2 * H), cfg.max_depth + 1)
@@ -296,30 +288,41 @@ def run_room(room, out_dir, cfg: CapacityConfig, index: int = 0, layout: ProbeLa
                     for k, s in enumerate(sensors):
                         emit2[mi_idx, k] = _render(mi, scene, s, cfg.emitter_spp,
                                                    seeds["emit2"] + 17 * k + 1000 * mi_idx)
-                if pair is not None and material == pair_material and kind in ("mesh", "envmap"):
-                    pair_imgs[f"{kind}_{VIEW_TAGS[vi]}"] = _render(mi, scene, pair, cfg.emitter_spp, seeds["emit"] + 999)
         del em
 
     record = score_renders(gt, emit, emit2, masks, cfg.materials)
     record.update({"name": out.name, "seed": getattr(room, "seed", None), "room": _summary(room), "plan": _plan(room),
                    "exposure_factor": factor, "layout": layout.to_dict(), "sphere_radii": radii,
-                   "pair_material": pair_material if pair is not None else None,
                    "mask_pixels": masks.sum(axis=(1, 2)).tolist(), "seconds": round(time.perf_counter() - t0, 2),
                    "settings": cfg.scene_settings()})
-    arrays = {"gt": gt, "emit": emit, "emit2": emit2, "masks": masks}
-    arrays.update({f"pair_{k}": v for k, v in pair_imgs.items()})
-    atomic_npz(out / "renders.npz", **arrays)
+    atomic_npz(out / "renders.npz", gt=gt, emit=emit, emit2=emit2, masks=masks)
     atomic_json(out / RESULT, record)
     return record
 
 
 def _plan(room) -> dict:
-    """Top-view footprints for the figures: floor cells (x0, z0, x1, z1) and furniture boxes
-    (x0, z0, x1, z1, kind, whether it emits light)."""
+    """Top-view footprints for the figures: floor cells (x0, z0, x1, z1); per piece of furniture
+    the box around its parts (x0, z0, x1, z1, kind, False), or for a light fixture one box per
+    emitting part (x0, z0, x1, z1, kind, True); windows as wall segments (x0, z0, x1, z1)."""
+    from roomlight.synth.layout import part_bounds
+
     emitting = set(room.emitters())
-    return {"cells": [[float(v) for v in c] for c in room.cells],
-            "furniture": [[float(f.lo[0]), float(f.lo[2]), float(f.hi[0]), float(f.hi[2]), str(f.kind),
-                           any(p.material in emitting for p in f.parts)] for f in room.furniture]}
+    boxes = []
+    for f in room.furniture:
+        if not f.parts:
+            continue
+        bounds = [part_bounds(p) for p in f.parts]
+        lights = [p.material in emitting for p in f.parts]
+        if not any(lights):
+            lo = np.min([b[0] for b in bounds], axis=0)
+            hi = np.max([b[1] for b in bounds], axis=0)
+            boxes.append([float(lo[0]), float(lo[2]), float(hi[0]), float(hi[2]), str(f.kind), False])
+        for p, (plo, phi) in zip(f.parts, bounds):
+            if p.material in emitting:
+                boxes.append([float(plo[0]), float(plo[2]), float(phi[0]), float(phi[2]), str(f.kind), True])
+    windows = [[float(w.origin[0]), float(w.origin[2]), float(w.origin[0] + w.edge_a[0]),
+                float(w.origin[2] + w.edge_a[2])] for w in room.windows]
+    return {"cells": [[float(v) for v in c] for c in room.cells], "furniture": boxes, "windows": windows}
 
 
 def _summary(room) -> dict:

@@ -3,9 +3,9 @@
 - ``probes-<material>.png``: the first room's probes (columns) under the 2.5D light and the
   environment map built at each capture point (rows), below their ground truth, with a top view
   of the room: probes, capture points and cameras (the paper's representation figure).
-- ``motivation.png``: probes A and B seen together, relit by the 2.5D light and by the
-  environment map of each capture point (rows) next to the ground truth (the paper's motivation
-  figure); from the first room that has a camera seeing both.
+- ``motivation.png``: the two objects at whose centres panoramas were captured, probes A and B
+  (silver matte), relit by the 2.5D light and by the environment map of each capture point (rows)
+  next to the ground truth (the paper's motivation figure), from the first room.
 - ``ratios.png``: per room, environment map / 2.5D light and sphere proxy / 2.5D light (log
   scale) against the paper's 2--5x band.
 
@@ -50,6 +50,9 @@ def _top_view(ax, record: dict) -> None:
             ax.add_patch(Rectangle((cx - hx, cz - hz), 2 * hx, 2 * hz, color="gold", alpha=0.9, lw=0))
         else:
             ax.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, color="0.8", alpha=0.6, lw=0))
+    for i, (x0, z0, x1, z1) in enumerate(plan.get("windows", [])):
+        ax.plot([x0, x1], [z0, z1], "-", color="deepskyblue", lw=4, solid_capstyle="butt",
+                label="windows" if i == 0 else None)
     lay = record["layout"]
     probes = np.asarray(lay["probes"])
     views = np.asarray(lay["viewpoints"])
@@ -64,7 +67,7 @@ def _top_view(ax, record: dict) -> None:
     ax.invert_yaxis()
     ax.set_xlabel("x (m)")
     ax.set_ylabel("z (m)")
-    ax.set_title("top view (gold: light fixtures)", fontsize=9)
+    ax.set_title("top view (gold: lights on)", fontsize=9)
     ax.legend(fontsize=7, loc="best")
     ax.autoscale_view()
 
@@ -111,29 +114,35 @@ def _probe_figure(record: dict, renders, material: str, path: Path) -> Path:
     return path
 
 
-def _motivation_figure(record: dict, renders, path: Path) -> Path:
+def _motivation_figure(record: dict, renders, material: str, path: Path) -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    gt = renders["pair_gt"]
-    expo = _exposure(gt)
-    fig, axes = plt.subplots(len(VIEW_TAGS), 3, figsize=(3 * 3.6, len(VIEW_TAGS) * 2.0))
+    m = record["settings"]["materials"].index(material)
+    gt, emit, masks = renders["gt"][m, 0], renders["emit"][m], renders["masks"]
+    expo = _exposure(np.concatenate([gt[k][masks[k]] for k in (0, 1)])[None])
+    rm = record["rmse"][material]
+    columns = [("ground truth (path traced)", None), ("2.5D area light", "mesh"), ("environment map", "envmap")]
     names = {"A": "captured at the centre of A", "B": "captured at the centre of B", "M": "captured at the midpoint"}
+    fig, axes = plt.subplots(len(VIEW_TAGS), 3, figsize=(3 * 3.3, len(VIEW_TAGS) * 1.9))
     for r, tag in enumerate(VIEW_TAGS):
-        for c, (key, title) in enumerate((("gt", "ground truth (path traced)"), (f"mesh_{tag}", "2.5D area light"),
-                                          (f"envmap_{tag}", "environment map"))):
+        for c, (title, kind) in enumerate(columns):
             ax = axes[r, c]
-            ax.imshow(to_display(renders[f"pair_{key}"] * expo))
+            pair = [gt[k] if kind is None else emit[KINDS.index(kind), r, k] for k in (0, 1)]
+            ax.imshow(to_display(np.concatenate(pair, axis=1) * expo))
             ax.set_xticks([])
             ax.set_yticks([])
+            if kind is not None:
+                ax.set_xlabel(f"RMSE A {rm[kind][r][0]:.3f}, B {rm[kind][r][1]:.3f}", fontsize=7)
             if r == 0:
                 ax.set_title(title, fontsize=9)
             if c == 0:
                 ax.set_ylabel(names[tag], fontsize=8)
-    fig.suptitle(f"{record['name']}: probes A (left) and B (right), {record['pair_material']} silver, relit from "
-                 "each capture point", fontsize=10)
+    fig.suptitle(f"{record['name']}: probes A (left) and B (right), {material}, relit from each capture point",
+                 fontsize=10)
+    fig.tight_layout()
     path = _save(fig, path)
     plt.close(fig)
     return path
@@ -180,14 +189,10 @@ def write_capacity_figures(out, records: list[dict], summary: dict) -> list[Path
     first = records[0]
     with np.load(out / "rooms" / first["name"] / "renders.npz") as z:
         renders = {k: z[k] for k in z.files}
-    for material in first["settings"]["materials"]:
+    materials = first["settings"]["materials"]
+    for material in materials:
         paths.append(_probe_figure(first, renders, material, fig_dir / f"probes-{material}.png"))
-    for rec in records:
-        with np.load(out / "rooms" / rec["name"] / "renders.npz") as z:
-            if "pair_gt" not in z.files:
-                continue
-            paths.append(_motivation_figure(rec, {k: z[k] for k in z.files if k.startswith("pair_")},
-                                            fig_dir / "motivation.png"))
-            break
+    shown = "matte" if "matte" in materials else materials[0]
+    paths.append(_motivation_figure(first, renders, shown, fig_dir / "motivation.png"))
     paths.append(_ratio_figure(summary, fig_dir / "ratios.png"))
     return paths

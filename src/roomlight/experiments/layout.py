@@ -30,8 +30,7 @@ import numpy as np
 
 from roomlight.errors import RoomlightError
 
-__all__ = ["ProbeLayout", "LayoutConfig", "Caster", "place_layout", "cameras_for", "pair_camera",
-           "sphere_proxy_radius", "wall_light_room", "wall_light_layout", "fibonacci_directions"]
+__all__ = ["ProbeLayout", "LayoutConfig", "Caster", "place_layout", "cameras_for", "sphere_proxy_radius", "wall_light_room", "wall_light_layout", "fibonacci_directions"]
 
 
 @dataclass(frozen=True)
@@ -59,8 +58,6 @@ class ProbeLayout:
         viewpoints: (3, 3) capture points: centre of A, centre of B, midpoint of A and B.
         cameras: one (origin, target) pair per probe (target = the probe centre).
         fov: horizontal field of view of the probe cameras, degrees.
-        pair: (origin, target, fov) of a wider camera that sees A and B together (the
-            motivation figure), or None when the room has no place for it.
     """
 
     probes: np.ndarray
@@ -68,7 +65,6 @@ class ProbeLayout:
     viewpoints: np.ndarray
     cameras: list = field(default_factory=list)
     fov: float = 30.0
-    pair: tuple | None = None
 
     VIEWPOINT_NAMES = ("centre of A", "centre of B", "midpoint")
 
@@ -76,18 +72,13 @@ class ProbeLayout:
         return {"probes": self.probes.round(5).tolist(), "radius": self.radius,
                 "viewpoints": self.viewpoints.round(5).tolist(), "viewpoint_names": list(self.VIEWPOINT_NAMES),
                 "cameras": [[np.round(o, 5).tolist(), np.round(t, 5).tolist()] for o, t in self.cameras],
-                "fov": self.fov,
-                "pair": None if self.pair is None else [np.round(self.pair[0], 5).tolist(),
-                                                        np.round(self.pair[1], 5).tolist(), self.pair[2]]}
+                "fov": self.fov}
 
     @classmethod
     def from_dict(cls, d: dict) -> "ProbeLayout":
-        pair = d.get("pair")
         return cls(np.asarray(d["probes"], np.float64), float(d["radius"]), np.asarray(d["viewpoints"], np.float64),
                    [(np.asarray(o, np.float64), np.asarray(t, np.float64)) for o, t in d["cameras"]],
-                   float(d["fov"]),
-                   None if pair is None else (np.asarray(pair[0], np.float64), np.asarray(pair[1], np.float64),
-                                              float(pair[2])))
+                   float(d["fov"]))
 
 
 def fibonacci_directions(n: int) -> np.ndarray:
@@ -184,7 +175,6 @@ def place_layout(room, caster: Caster, rng: np.random.Generator, cfg: LayoutConf
                 if cams is None:
                     continue
                 layout.cameras = cams
-                layout.pair = pair_camera(layout, caster)
                 return layout
     raise RoomlightError(f"room {getattr(room, 'seed', '?')}: no free place for three probes "
                          f"({len(free)} free candidates of {cfg.tries})")
@@ -198,13 +188,13 @@ def sphere_proxy_radius(probes, radius: float, viewpoint, margin: float) -> floa
     return max(float(np.linalg.norm(np.asarray(p) - v)) + radius for p in probes) * (1.0 + margin)
 
 
-def _inside_emitters(caster: Caster, layout: ProbeLayout, origin, margin: float | None) -> bool:
-    """``origin`` is seen from every capture point (inside each 2.5D light) and, unless ``margin``
-    is None, 5 cm or more inside each capture point's sphere proxy."""
+def _inside_emitters(caster: Caster, layout: ProbeLayout, origin, margin: float) -> bool:
+    """``origin`` is seen from every capture point (inside each 2.5D light) and 5 cm or more
+    inside each capture point's sphere proxy."""
     for v in layout.viewpoints:
         if not caster.sees(v, origin):
             return False
-        if margin is not None and np.linalg.norm(origin - v) > sphere_proxy_radius(
+        if np.linalg.norm(origin - v) > sphere_proxy_radius(
                 layout.probes, layout.radius, v, margin) - 0.05:
             return False
     return True
@@ -259,34 +249,6 @@ def cameras_for(layout: ProbeLayout, caster: Caster, cfg: LayoutConfig = LayoutC
     return cams
 
 
-def pair_camera(layout: ProbeLayout, caster: Caster) -> tuple | None:
-    """A camera that sees probes A and B side by side: on either side of the segment AB, 20
-    degrees above it, far enough for both to fit a 60 degree field of view (the nearest that
-    fits, sees both and is seen from every capture point is taken), or None."""
-    a, b = layout.probes[0], layout.probes[1]
-    m = 0.5 * (a + b)
-    ab = b - a
-    half = 0.5 * float(np.linalg.norm(ab)) + 2.0 * layout.radius
-    horiz = np.array([ab[0], 0.0, ab[2]])
-    if np.linalg.norm(horiz) < 1e-6:
-        return None
-    horiz /= np.linalg.norm(horiz)
-    perp = np.array([-horiz[2], 0.0, horiz[0]])
-    fov = 60.0
-    dist0 = half / math.tan(math.radians(fov / 2))
-    for scale in (1.0, 1.15, 1.3):
-        for sign in (1.0, -1.0):
-            e = math.radians(20.0)
-            d = dist0 * scale
-            o = m + d * (sign * math.cos(e) * perp + math.sin(e) * np.array([0.0, 1.0, 0.0]))
-            if caster.clearance(o, 64) < 0.1:
-                continue
-            if (all(_clear_view(caster, o, p, layout.radius, [], 0.0) for p in (a, b))
-                    and _inside_emitters(caster, layout, o, None)):  # relit by the 2.5D light and env map only
-                return o, m.copy(), fov
-    return None
-
-
 # ---------------------------------------------------------------------------------------------
 # A fixed room: probes next to a wall light
 # ---------------------------------------------------------------------------------------------
@@ -328,5 +290,4 @@ def wall_light_layout(room, caster: Caster, cfg: LayoutConfig = LayoutConfig()) 
     if cams is None:
         raise RoomlightError("wall light room: no clear camera for a probe")
     layout.cameras = cams
-    layout.pair = pair_camera(layout, caster)
     return layout
