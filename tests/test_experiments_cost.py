@@ -41,9 +41,12 @@ def test_quick_cost_table_on_the_tiny_network(tmp_path):
     assert m["paper_schedule_panoramas"] == epochs * (n // batch) * batch == 662_400
     assert m["paper_schedule_hours"] == pytest.approx(662_400 / m["panoramas_per_second"] / 3600)
     assert m["panoramas_per_second"] == pytest.approx(COST_PRESETS["quick"].train_batch / m["train_step_seconds"])
+    steps = 662_400 / COST_PRESETS["quick"].train_batch
+    assert m["paper_schedule_cpu_hours"] == pytest.approx(steps * m["train_step_cpu_seconds"] / 3600)
     for method in ("prior", "direct-envmap"):
         f = doc["fits"][method]
         assert f["fit_minutes"] == pytest.approx(f["seconds_per_iteration"] * 500 / 60)
+        assert f["fit_cpu_minutes"] == pytest.approx(f["cpu_seconds_per_iteration"] * 500 / 60)
         assert f["iterations_timed"] == COST_PRESETS["quick"].fit_iterations
     md = (out / "cost.md").read_text()
     assert doc["device"]["name"] in md and "| roomlight prior | 2.5D AL | 0.0216 |" in md
