@@ -33,6 +33,12 @@ Layout of ``OUT``::
     OUT/capacity.md            the tables; OUT/figures/*.png
     OUT/rooms/<room>/layout.json, pano-{A,B,M}.exr, renders.npz, result.json (written last)
 
+``renders.npz`` (linear radiance in the calibrated units, float32): ``gt`` (M, 2, P, n, n, 3) two
+ground-truth renders per material and probe; ``emit`` (M, K, V, P, n, n, 3) under each emitter kind
+(:data:`~roomlight.experiments.capacity_record.KINDS`) at each viewpoint (A, B, M); ``emit2``
+(M, P, n, n, 3) the 2.5D light at the midpoint with another seed; ``masks`` (P, n, n) bool, the
+scored pixels. ``pano-*.exr``: R, G, B (calibrated) + Z (metres), world-aligned (yaw 0).
+
 A room with a ``result.json`` is skipped, so an interrupted run continues where it stopped.
 """
 
