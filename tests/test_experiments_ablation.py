@@ -130,7 +130,7 @@ def test_rows_share_one_budget_and_differ_only_in_their_switches():
 
 @pytest.mark.mitsuba
 @pytest.mark.slow
-def test_tiny_study_runs_every_row_and_resumes(tmp_path):
+def test_tiny_study_runs_every_row_and_resumes(tmp_path, one_torch_thread):
     cfg = ABLATION_PRESETS["tiny"]
     out = tmp_path / "study"
     notes = []

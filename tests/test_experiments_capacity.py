@@ -133,7 +133,7 @@ def test_procedural_layout_keeps_clear_of_surfaces(mi):
 # ---------------------------------------------------------------------------------------------
 
 @pytest.mark.mitsuba
-def test_furnace_room_every_emitter_gives_half_the_uniform_radiance(mi, tmp_path):
+def test_furnace_room_every_emitter_gives_half_the_uniform_radiance(mi, tmp_path, one_torch_thread):
     """A closed room whose every surface emits L and reflects nothing: a gray (albedo 0.5) diffuse
     probe anywhere reflects exactly 0.5 L, and every emitter built from any viewpoint's panorama
     shows the same uniform L. Calibrated units make L = 1, so every render averages 0.5."""
@@ -158,7 +158,7 @@ def test_furnace_room_every_emitter_gives_half_the_uniform_radiance(mi, tmp_path
 
 @pytest.mark.mitsuba
 @pytest.mark.slow
-def test_wall_light_room_ranks_noise_floor_2p5d_and_env_map(mi, tmp_path):
+def test_wall_light_room_ranks_noise_floor_2p5d_and_env_map(mi, tmp_path, one_torch_thread):
     """Probes 0.8 m from a wall light: the 2.5D light follows the light's direction from each probe,
     the environment map does not. Expected order, per material: noise floor < 2.5D < env map; and
     an environment map relights the probe at its own capture point better than the other probe."""

@@ -27,8 +27,7 @@ def test_settings_are_checked():
 
 
 @pytest.mark.mitsuba
-@pytest.mark.slow
-def test_quick_cost_table_on_the_tiny_network(tmp_path):
+def test_quick_cost_table_on_the_tiny_network(tmp_path, one_torch_thread):
     out = tmp_path / "cost"
     args = ["experiment", "cost", "--out", out, "--quick", "--model-preset", "tiny", "--device", "cpu",
             "--methods", "prior,direct-envmap"]
