@@ -18,7 +18,7 @@ PACKAGE = Path(roomlight.__file__).parent
 #: Top to bottom. Names are subpackages or top-level modules of ``roomlight``.
 LAYERS = [
     ["cli"],
-    ["demo"],
+    ["demo", "experiments"],
     ["train", "parallax"],
     ["viewer"],
     ["photobench"],

@@ -36,16 +36,17 @@ def cli(threads):
       roomlight bench make|run|report      the synthetic benchmark
       roomlight view PATH --out page.html  an interactive viewer of a 2.5D light
       roomlight export PATH --out light.glb   the light for Blender / three.js / USD
+      roomlight experiment capacity|ablate|cost   the paper's supplementary analyses
     """
     apply_thread_policy(threads)
 
 
 def _register():
-    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, export, fit, fit_pano, info, prepare,
-                               render, sample, synth, train, view)
+    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, experiment, export, fit, fit_pano, info,
+                               prepare, render, sample, synth, train, view)
 
     for mod in (info, emitter, render, synth, prepare, data, train, fit_pano, eval_prior, sample, convert, fit, bench,
-                demo, view, export):
+                demo, view, export, experiment):
         cli.add_command(mod.command)
 
 

@@ -41,6 +41,12 @@ class ModelConfig(StrictConfig):
     logvar_range: tuple[float, float] = (-30.0, 20.0)
     #: GroupNorm epsilon (the authors use 1e-6 everywhere).
     norm_eps: float = 1e-6
+    #: Decoder norms are AdaGN conditioned on z (paper §3.2). False (an ablation): plain affine
+    #: GroupNorms, so z reaches the decoder only through its first linear layer.
+    adagn: bool = True
+    #: Append (cos θ, sin θ) to the encoder's and the decoder's inputs (paper §3.2). False (an
+    #: ablation): the convolutions see no latitude.
+    latitude: bool = True
 
     def __post_init__(self) -> None:
         # Normalise sequences coming from JSON/YAML (lists) to tuples so configs compare equal.
@@ -71,6 +77,11 @@ class ModelConfig(StrictConfig):
         """Length of the flattened bottleneck, z_channels * h * w (4096 by default)."""
         h, w = self.bottleneck_resolution
         return self.z_channels * h * w
+
+    @property
+    def latitude_channels(self) -> int:
+        """Channels appended to the encoder's and decoder's inputs: 2 with :attr:`latitude`, else 0."""
+        return 2 if self.latitude else 0
 
     @property
     def encoder_channels(self) -> list[int]:

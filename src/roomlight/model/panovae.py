@@ -38,8 +38,11 @@ FORMAT_NAME = "roomlight.panovae"
 FORMAT_VERSION = 1
 
 
-def _with_latitude(x: torch.Tensor) -> torch.Tensor:
-    """Append (cos θ, sin θ) at pixel centres: (B, C, H, W) -> (B, C + 2, H, W)."""
+def _with_latitude(x: torch.Tensor, enabled: bool = True) -> torch.Tensor:
+    """Append (cos θ, sin θ) at pixel centres: (B, C, H, W) -> (B, C + 2, H, W); ``x`` itself
+    when not ``enabled`` (the ablation without latitude channels)."""
+    if not enabled:
+        return x
     b, _, h, w = x.shape
     lat = latitude_channels(h, w, dtype=x.dtype, device=x.device)
     return torch.cat([x, lat.unsqueeze(0).expand(b, -1, -1, -1)], dim=1)
@@ -61,20 +64,23 @@ class EncoderStage(nn.Module):
 
 
 class DecoderStage(nn.Module):
-    """Nearest x2 upsample + padded conv, then ``num_res_blocks`` AdaGN ResBlocks."""
+    """Nearest x2 upsample + padded conv, then ``num_res_blocks`` AdaGN ResBlocks (plain
+    ResBlocks when ``adagn`` is off)."""
 
     def __init__(self, c_in: int, c_out: int, num_res_blocks: int, latent_dim: int, groups: int,
-                 eps: float):
+                 eps: float, adagn: bool = True):
         super().__init__()
+        self.adagn = adagn
         self.up = Upsample(c_in, c_out)
         self.blocks = nn.ModuleList(
-            AdaGNResBlock(c_out, latent_dim, groups, eps) for _ in range(num_res_blocks)
+            (AdaGNResBlock(c_out, latent_dim, groups, eps) if adagn else ResBlock(c_out, groups, eps))
+            for _ in range(num_res_blocks)
         )
 
     def forward(self, x: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
         x = self.up(x)
         for block in self.blocks:
-            x = block(x, z)
+            x = block(x, z) if self.adagn else block(x)
         return x
 
 
@@ -87,7 +93,8 @@ class Encoder(nn.Module):
     def __init__(self, cfg: ModelConfig):
         super().__init__()
         chans = cfg.encoder_channels
-        self.stem = SphericalConv2d(cfg.in_channels + 2, chans[0])
+        self.latitude = cfg.latitude
+        self.stem = SphericalConv2d(cfg.in_channels + cfg.latitude_channels, chans[0])
         self.stages = nn.ModuleList(
             EncoderStage(chans[k], chans[k + 1], cfg.num_res_blocks, cfg.norm_groups, cfg.norm_eps)
             for k in range(cfg.num_stages)
@@ -102,7 +109,7 @@ class Encoder(nn.Module):
         All of these are equivariant to longitude rolls (by multiples of the downsampling
         factor); only the final linear layer is not.
         """
-        h = self.stem(_with_latitude(x))
+        h = self.stem(_with_latitude(x, self.latitude))
         maps = [h]
         for stage in self.stages:
             h = stage(h)
@@ -120,7 +127,8 @@ class Decoder(nn.Module):
     """z (B, latent_dim) -> x_hat (B, in_channels, H, W) in the z-scored domain.
 
     z enters twice: through ``from_latent`` (Linear to the 8x16 starting map) and through every
-    AdaGN, which gives all scales direct access to the global code.
+    AdaGN, which gives all scales direct access to the global code. With ``cfg.adagn`` off the
+    norms are affine GroupNorms and only ``from_latent`` sees z.
     """
 
     def __init__(self, cfg: ModelConfig):
@@ -128,13 +136,14 @@ class Decoder(nn.Module):
         self.cfg = cfg
         chans = cfg.encoder_channels[::-1]  # e.g. [256, 256, 128, 64, 64]
         self.from_latent = nn.Linear(cfg.latent_dim, cfg.bottleneck_features)
-        self.stem = SphericalConv2d(cfg.z_channels + 2, chans[0])
+        self.stem = SphericalConv2d(cfg.z_channels + cfg.latitude_channels, chans[0])
         self.stages = nn.ModuleList(
             DecoderStage(chans[k], chans[k + 1], cfg.num_res_blocks, cfg.latent_dim,
-                         cfg.norm_groups, cfg.norm_eps)
+                         cfg.norm_groups, cfg.norm_eps, cfg.adagn)
             for k in range(cfg.num_stages)
         )
-        self.out_norm = AdaGN(chans[-1], cfg.latent_dim, cfg.norm_groups, cfg.norm_eps)
+        self.out_norm = (AdaGN(chans[-1], cfg.latent_dim, cfg.norm_groups, cfg.norm_eps) if cfg.adagn
+                         else nn.GroupNorm(cfg.norm_groups, chans[-1], eps=cfg.norm_eps))
         self.out_conv = SphericalConv2d(chans[-1], cfg.in_channels)
 
     def latent_to_map(self, z: torch.Tensor) -> torch.Tensor:
@@ -147,10 +156,11 @@ class Decoder(nn.Module):
 
         Equivariant to rolling ``h`` in longitude (the output rolls by the upsampling factor).
         """
-        x = self.stem(_with_latitude(h))
+        x = self.stem(_with_latitude(h, self.cfg.latitude))
         for stage in self.stages:
             x = stage(x, z)
-        return self.out_conv(self.out_norm(x, z), silu=True)  # no output activation
+        x = self.out_norm(x, z) if self.cfg.adagn else self.out_norm(x)
+        return self.out_conv(x, silu=True)  # no output activation
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:
         return self.decode_map(self.latent_to_map(z), z)

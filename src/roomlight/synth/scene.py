@@ -113,7 +113,7 @@ def scene_entries(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int 
 
 
 def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | None = None,
-                integrator: dict | None = None):
+                integrator: dict | None = None, extra: dict | None = None):
     """Instantiate the room as a ``mi.Scene`` with a ``path`` integrator.
 
     Args:
@@ -121,7 +121,14 @@ def build_scene(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int | 
         max_depth: Mitsuba path length limit (see :data:`DEFAULT_MAX_DEPTH`).
         rr_depth: depth at which Russian roulette starts (default: ``max_depth``, i.e. none).
         integrator: a full integrator dict overriding the two settings above.
+        extra: more scene entries by id (Mitsuba dicts or objects: probe spheres, a sensor) placed
+            in the room as they are; an id the room uses itself is refused.
     Returns:
         ``mi.Scene`` (no sensor: render it with :mod:`roomlight.synth.camera`).
     """
-    return mitsuba().load_dict(scene_entries(room, max_depth, rr_depth, integrator))
+    entries = scene_entries(room, max_depth, rr_depth, integrator)
+    for key, value in (extra or {}).items():
+        if key in entries:
+            raise KeyError(f"room {room.seed}: extra scene entry {key!r} clashes with the room's own")
+        entries[key] = value
+    return mitsuba().load_dict(entries)

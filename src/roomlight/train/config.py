@@ -29,6 +29,9 @@ class TrainConfig(StrictConfig):
 
     #: Model architecture preset name (``default`` = the paper's network, ``small``, ``tiny``).
     model: str = "default"
+    #: Fields of the preset's :class:`~roomlight.model.ModelConfig` to change, e.g.
+    #: ``{"adagn": false}`` or ``{"latitude": false}`` (the ablations; ``--set model_overrides.adagn=false``).
+    model_overrides: dict = field(default_factory=dict)
     #: Global batch size (summed over all DDP processes); the paper uses 32.
     batch_size: int = 32
     #: Passes over the training split; the schedule spans epochs x floor(N / batch) steps.
@@ -100,6 +103,7 @@ class TrainConfig(StrictConfig):
     def __post_init__(self) -> None:
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
         object.__setattr__(self, "loss", dict(self.loss))
+        object.__setattr__(self, "model_overrides", dict(self.model_overrides))
         self.validate()
 
     def validate(self) -> None:
@@ -108,6 +112,7 @@ class TrainConfig(StrictConfig):
             return RoomlightError(f"TrainConfig.{name} = {getattr(self, name)!r}: {why}")
 
         get_preset(self.model)  # raises for unknown presets
+        self.model_config  # unknown or mistyped model_overrides are refused with the field's name
         for name in ("batch_size", "log_every", "ckpt_every", "val_batches", "keep_checkpoints"):
             if getattr(self, name) <= 0:
                 raise bad(name, "must be positive")
@@ -137,8 +142,11 @@ class TrainConfig(StrictConfig):
     # ------------------------------------------------------------------ derived
     @property
     def model_config(self) -> ModelConfig:
-        """The architecture of the preset named by :attr:`model`."""
-        return get_preset(self.model)
+        """The architecture of the preset named by :attr:`model`, with :attr:`model_overrides` applied."""
+        try:
+            return get_preset(self.model).override(**self.model_overrides)
+        except RoomlightError as exc:
+            raise RoomlightError(f"TrainConfig.model_overrides: {exc}") from None
 
     @property
     def loss_config(self) -> LossConfig:
@@ -150,9 +158,11 @@ class TrainConfig(StrictConfig):
     # the field's path and, for a misspelt name, the closest valid one.
 
     def replace(self, **overrides) -> "TrainConfig":
-        """A copy with some fields replaced (``loss`` entries may be given as ``loss={...}``, merged)."""
-        if isinstance(overrides.get("loss"), dict):
-            overrides["loss"] = {**self.loss, **overrides["loss"]}
+        """A copy with some fields replaced (``loss`` and ``model_overrides`` entries may be given as
+        ``loss={...}``, merged into the current ones)."""
+        for name in ("loss", "model_overrides"):
+            if isinstance(overrides.get(name), dict):
+                overrides[name] = {**getattr(self, name), **overrides[name]}
         return dataclasses.replace(self, **checked_fields(type(self), overrides))
 
     override = replace
@@ -197,10 +207,10 @@ def config_differences(saved: TrainConfig, new: TrainConfig, ignore=RESUME_SAFE_
     for k in a:
         if k in ignore or a[k] == b[k]:
             continue
-        if k == "loss":
+        if k in ("loss", "model_overrides"):
             for lk in sorted(set(a[k]) | set(b[k])):
                 if a[k].get(lk) != b[k].get(lk):
-                    diffs.append(f"loss.{lk}: {a[k].get(lk)!r} -> {b[k].get(lk)!r}")
+                    diffs.append(f"{k}.{lk}: {a[k].get(lk)!r} -> {b[k].get(lk)!r}")
         else:
             diffs.append(f"{k}: {a[k]!r} -> {b[k]!r}")
     return diffs
