@@ -23,6 +23,7 @@ LAYERS = [
     ["viewer"],
     ["export"],
     ["eval", "bench", "synth"],
+    ["photo"],
     ["inverse", "data"],
     ["scene", "fit", "losses", "model", "examples"],
     ["render"],

@@ -32,6 +32,7 @@ def cli(threads):
       roomlight train --data DIR --out RUN     train the prior on panoramas
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
+      roomlight fit-photo IMAGE --out DIR   light + materials from one photograph
       roomlight bench make|run|report      the synthetic benchmark
       roomlight view PATH --out page.html  an interactive viewer of a 2.5D light
       roomlight export PATH --out light.glb   the light for Blender / three.js / USD
@@ -42,9 +43,10 @@ def cli(threads):
 def _register():
     from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, export, fit, fit_pano, info, render,
                                sample, synth, train, view)
+    from roomlight.cli import fit_photo
 
     for mod in (info, emitter, render, synth, data, train, fit_pano, eval_prior, sample, convert, fit, bench, demo,
-                view, export):
+                view, export, fit_photo):
         cli.add_command(mod.command)
 
 
