@@ -12,7 +12,12 @@ from __future__ import annotations
 
 import torch
 
-__all__ = ["ObjectMaterials", "object_id", "principled_bsdf"]
+from roomlight.errors import RoomlightError
+
+__all__ = ["ObjectMaterials", "object_id", "principled_bsdf", "PARTS"]
+
+#: What a material has: fitted by default, any of them can be held at known values.
+PARTS = ("albedo", "roughness", "metallic")
 
 
 def object_id(label: int) -> str:
@@ -32,13 +37,26 @@ class ObjectMaterials(torch.nn.Module):
     Attributes:
         labels: the objects' mask labels, in order.
         logits: (n, 5) parameters: albedo R, G, B, roughness, metallic (before the sigmoid).
+        free: the parts that are fitted (:data:`PARTS`); the others keep the values they are given.
     """
 
-    def __init__(self, labels: list[int], init: float = 0.5):
+    def __init__(self, labels: list[int], init: float = 0.5, free=PARTS):
         super().__init__()
         self.labels = [int(lab) for lab in labels]
         start = torch.logit(torch.tensor(float(init)))
         self.logits = torch.nn.Parameter(torch.full((len(self.labels), 5), float(start)))
+        unknown = set(free) - set(PARTS)
+        if unknown:
+            raise RoomlightError(f"materials: unknown part(s) {sorted(unknown)}; choose from {', '.join(PARTS)}")
+        self.free = tuple(p for p in PARTS if p in free)
+        columns = {"albedo": [0, 1, 2], "roughness": [3], "metallic": [4]}
+        mask = torch.zeros(5)
+        for part in self.free:
+            mask[columns[part]] = 1.0
+        self.register_buffer("free_mask", mask, persistent=False)
+        if len(self.free) < len(PARTS):
+            # Held parts get no gradient, so Adam leaves them exactly where set_values put them.
+            self.logits.register_hook(lambda g: g * self.free_mask)
 
     def values(self) -> torch.Tensor:
         """(n, 5) albedo R, G, B, roughness, metallic in (0, 1), differentiable."""

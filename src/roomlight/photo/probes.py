@@ -21,10 +21,10 @@ import numpy as np
 import torch
 
 from roomlight.photo.geometry import SceneTransform
-from roomlight.photo.materials import object_id
 from roomlight.photo.unproject import ObjectMesh
 
-__all__ = ["ProbeSite", "choose_probe_sites", "LightView", "render_probes", "probe_figure", "PROBE_MATERIALS"]
+__all__ = ["ProbeSite", "choose_probe_sites", "LightView", "render_probes", "probe_figure", "PROBE_MATERIALS",
+           "closeup_disc", "CLOSEUP_MARGIN"]
 
 #: The probe materials of the figure, by row.
 PROBE_MATERIALS = ("mirror", "diffuse")
@@ -103,22 +103,40 @@ class LightView:
     bsdfs: dict
 
 
+#: A close-up's half field of view is this times the probe's angular radius.
+CLOSEUP_MARGIN = 1.15
+
+
 def _closeup_sensor(transform: SceneTransform, center_room: np.ndarray, radius_room: float, res: int) -> dict:
     from roomlight.render.camera import perspective_sensor
 
     eye = transform.translation
     d = float(np.linalg.norm(center_room - eye))
-    half = math.asin(min(radius_room / d, 0.95)) * 1.15
+    half = math.asin(min(radius_room / d, 0.95)) * CLOSEUP_MARGIN
     return perspective_sensor(eye.tolist(), center_room.tolist(), transform.up.tolist(), math.degrees(2 * half),
                               res, res)
 
 
+def closeup_disc(site: ProbeSite, resolution: int, shrink: float = 0.9) -> np.ndarray:
+    """(res, res) bool: the close-up pixels whose centre ray meets the probe sphere, shrunk to
+    ``shrink`` of its angular radius (the rim mixes sphere and background). Scale-free: the
+    same in every room frame."""
+    d = float(np.linalg.norm(site.center))
+    alpha = math.asin(min(site.radius / d, 0.95))
+    t = math.tan(alpha * CLOSEUP_MARGIN)
+    x = ((np.arange(resolution) + 0.5) / resolution * 2 - 1) * t
+    xx, yy = np.meshgrid(x, x)
+    return np.arctan(np.hypot(xx, yy)) < shrink * alpha
+
+
 def render_probes(view: LightView, objects: list[ObjectMesh], sites: list[ProbeSite], intrinsics, spp: int = 64,
-                  resolution: int = 64, seed: int = 0, max_depth: int = 4) -> dict[str, np.ndarray]:
+                  resolution: int = 64, seed: int = 0, max_depth: int = 4, materials=PROBE_MATERIALS,
+                  frame: bool = True) -> dict[str, np.ndarray]:
     """Renders of the probes under one light.
 
-    Returns ``frame``: (H, W, 3) the photograph's view with mirror probes inserted, and for each
-    material of :data:`PROBE_MATERIALS` an array (n, res, res, 3) of close-ups, all linear RGB.
+    Returns, for each of ``materials`` (names of :mod:`roomlight.render.materials`), an array
+    (n, res, res, 3) of close-ups, and with ``frame`` also ``frame``: (H, W, 3) the photograph's
+    view with the first material's probes inserted; all linear RGB.
     """
     from roomlight.photo.scene import object_shapes, photo_sensor
     from roomlight.render.materials import material
@@ -126,12 +144,12 @@ def render_probes(view: LightView, objects: list[ObjectMesh], sites: list[ProbeS
 
     t = view.transform
     out: dict[str, np.ndarray] = {}
-    for mat in PROBE_MATERIALS:
+    for n, mat in enumerate(materials):
         extra = dict(object_shapes(objects, t, view.bsdfs))
         for k, s in enumerate(sites):
             extra[f"probe_{k}"] = {"type": "sphere", "center": t.points(np.asarray(s.center)).tolist(),
                                    "radius": float(s.radius * t.scale), "bsdf": material(mat)}
-        sensor = photo_sensor(intrinsics, t) if mat == "mirror" else None
+        sensor = photo_sensor(intrinsics, t) if frame and n == 0 else None
         es = EmitterScene(view.kind, tuple(view.radiance.shape[:2]), objects=extra, sensor=sensor,
                           integrator={"type": "path", "max_depth": int(max_depth)})
         es.set_emitter(view.radiance, view.depth)

@@ -26,7 +26,8 @@ from roomlight.photo.camera import Intrinsics, camera_rotation
 from roomlight.photo.geometry import SceneTransform
 from roomlight.photo.materials import principled_bsdf
 
-__all__ = ["SyntheticObject", "render_photo", "render_photo_case", "read_truth"]
+__all__ = ["SyntheticObject", "render_photo", "render_photo_case", "read_truth", "example_photo_case",
+           "EXAMPLE_OBJECTS"]
 
 
 @dataclass
@@ -115,18 +116,31 @@ def render_photo(radiance: torch.Tensor, depth: torch.Tensor, objects: list[Synt
             "normals": n_cam.reshape(h, w, 3).astype(np.float32)}
 
 
+def _scaled_to_key(shot: dict, radiance: torch.Tensor, key: float) -> tuple[dict, torch.Tensor]:
+    """Scale the light (and, rendering being linear in it, the image) so the objects' median is ``key``."""
+    inside = shot["labels"] > 0
+    level = float(np.median(shot["image"][inside].mean(-1))) if inside.any() else float(np.median(shot["image"]))
+    f = key / max(level, 1e-8)
+    return {**shot, "image": (shot["image"] * f).astype(np.float32)}, radiance * f
+
+
 def render_photo_case(folder, radiance: torch.Tensor, depth: torch.Tensor, objects: list[SyntheticObject],
                       intrinsics: Intrinsics, origin=(0.0, 0.0, 0.0), pitch_deg: float = 0.0, roll_deg: float = 0.0,
-                      spp: int = 256, seed: int = 0, depth_kind: str = "radial") -> dict[str, Path]:
+                      spp: int = 256, seed: int = 0, depth_kind: str = "radial",
+                      object_key: float | None = None) -> dict[str, Path]:
     """Render a photograph (:func:`render_photo`) and write it as a photo case folder with ``truth/``.
 
     ``depth_kind`` ``z`` stores the z-depth instead of the radial distance (camera.json says which).
+    ``object_key``: scale the room's radiance (written to ``truth/``) so that the objects' median
+    pixel value is this (a camera's exposure); None keeps the radiance as given.
     """
     from roomlight.io import write_panorama, write_ply
     from roomlight.photo.case import write_photo_case
     from roomlight.photo.unproject import unproject
 
     shot = render_photo(radiance, depth, objects, intrinsics, origin, pitch_deg, roll_deg, spp, seed)
+    if object_key is not None:
+        shot, radiance = _scaled_to_key(shot, radiance, object_key)
     d = shot["depth"]
     if depth_kind == "z":
         unit = unproject(np.ones_like(d), intrinsics, "radial")  # unit rays: z of a radial distance of 1
@@ -161,3 +175,35 @@ def read_truth(folder) -> dict:
     return {"radiance": torch.as_tensor(np.asarray(pano.radiance, np.float32)),
             "depth": torch.as_tensor(np.asarray(pano.depth, np.float32)), "transform": transform,
             "materials": {int(k): v for k, v in info["materials"].items()}}
+
+
+#: The example photograph's objects: (label, built-in shape, bounding radius m, centre in the room, albedo,
+#: roughness, metallic). They rest on the example room's floor (y = -1.5 m) in front of the camera.
+EXAMPLE_OBJECTS = (
+    (1, "sphere", 0.28, (-0.55, -1.22, -2.1), (0.75, 0.32, 0.22), 0.6, 0.0),
+    (2, "blob", 0.32, (0.55, -1.2, -2.6), (0.25, 0.45, 0.7), 0.4, 0.0),
+    (3, "torus", 0.22, (0.05, -1.42, -1.55), (0.8, 0.8, 0.75), 0.3, 0.0),
+)
+
+
+def example_photo_case(folder, width: int = 320, height: int = 240, fov_deg: float = 60.0, pitch_deg: float = -30.0,
+                       panorama_height: int = 128, spp: int = 256, seed: int = 0, depth_kind: str = "z",
+                       key: float = 0.35) -> dict[str, Path]:
+    """A rendered photo case of three objects on the floor of the example room (needs no data files).
+
+    The camera stands at the room's capture point, 1.5 m above the floor, looking down by
+    ``-pitch_deg``; the light is the example room (:func:`roomlight.examples.example_room`) as a
+    2.5D area light, its radiance scaled so the objects' median pixel is ``key``.
+    """
+    from roomlight.examples import example_room
+    from roomlight.scene.shapes import builtin_shape
+
+    radiance, depth = example_room(panorama_height)
+    objects = []
+    for label, shape, radius, centre, albedo, rough, metal in EXAMPLE_OBJECTS:
+        v, f = builtin_shape(shape)
+        objects.append(SyntheticObject(label, v.astype(np.float64) * radius + np.asarray(centre), f.astype(np.int64),
+                                       albedo, rough, metal))
+    intr = Intrinsics.from_fov(fov_deg, width, height)
+    return render_photo_case(folder, radiance, depth, objects, intr, pitch_deg=pitch_deg, spp=spp, seed=seed,
+                             depth_kind=depth_kind, object_key=key)
