@@ -28,7 +28,7 @@ import numpy as np
 
 from roomlight.errors import InputFileError, RoomlightError
 from roomlight.photo.camera import Intrinsics
-from roomlight.photo.masks import ObjectLabels, read_mask
+from roomlight.photo.masks import ObjectLabels, labels_from_array, read_mask_array
 from roomlight.photo.unproject import DEPTH_KINDS
 
 __all__ = ["CASE_FORMAT", "CASE_VERSION", "IMAGE_NAMES", "DEPTH_NAMES", "MASK_NAMES", "NORMAL_NAMES",
@@ -332,8 +332,9 @@ def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, n
     if mask is None:
         raise RoomlightError(f"{image_path}: no mask of the objects of interest: pass --mask FILE (binary or "
                              "integer labels, the image's size)")
-    labels = read_mask(mask, min_fraction=min_object_fraction)
-    _check_size(mask, "mask", labels.labels.shape, image_path, img.shape)
+    raw = read_mask_array(mask)
+    _check_size(mask, "mask", raw.shape, image_path, img.shape)
+    labels = labels_from_array(raw, min_object_fraction, where=str(mask))
     files["mask"] = str(mask)
     notes.extend(labels.notes)
     if normals is not None:

@@ -19,7 +19,7 @@ import numpy as np
 
 from roomlight.errors import InputFileError, RoomlightError
 
-__all__ = ["MASK_EXTENSIONS", "ObjectLabels", "read_mask", "labels_from_array", "connected_components",
+__all__ = ["MASK_EXTENSIONS", "ObjectLabels", "read_mask", "read_mask_array", "labels_from_array", "connected_components",
            "resize_nearest", "erode"]
 
 MASK_EXTENSIONS = (".png", ".npy", ".exr")
@@ -131,8 +131,8 @@ def labels_from_array(values: np.ndarray, min_fraction: float = 0.0, where: str 
     return ObjectLabels(labels, kind, kept, notes)
 
 
-def read_mask(path, min_fraction: float = 0.0) -> ObjectLabels:
-    """Read a mask file (``.png``, ``.npy`` or ``.exr``) into object labels (module docstring)."""
+def read_mask_array(path) -> np.ndarray:
+    """The raw content of a mask file (``.png``, ``.npy`` or ``.exr``): (H, W) values or (H, W, 3) colours."""
     p = Path(path)
     if not p.is_file():
         raise InputFileError(p, "mask file does not exist" if not p.exists() else "is not a regular file")
@@ -164,12 +164,12 @@ def read_mask(path, min_fraction: float = 0.0) -> ObjectLabels:
         raise InputFileError(p, f"cannot read the mask ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] != 3):
         raise InputFileError(p, f"expected an (H, W) label array or an RGB image, got shape {a.shape}")
-    try:
-        return labels_from_array(a, min_fraction, where=str(p))
-    except InputFileError:
-        raise
-    except RoomlightError as exc:
-        raise RoomlightError(str(exc)) from None
+    return a
+
+
+def read_mask(path, min_fraction: float = 0.0) -> ObjectLabels:
+    """Read a mask file (``.png``, ``.npy`` or ``.exr``) into object labels (module docstring)."""
+    return labels_from_array(read_mask_array(path), min_fraction, where=str(path))
 
 
 def _read_png(p: Path) -> np.ndarray:
