@@ -138,6 +138,8 @@ def test_interrupted_fit_resumes_where_it_stopped(photo, prior, tmp_path, monkey
     monkeypatch.setattr(PhotoFitter, "step", original)
     with pytest.raises(RoomlightError, match=r"other settings \(lr\)"):
         fit_photo(case, "prior", cfg.override(lr=0.05), model=prior, out_dir=tmp_path / "again", progress=False)
+    with pytest.raises(RoomlightError, match="another input or method"):
+        fit_photo(case, "prior-envmap", cfg, model=prior, out_dir=tmp_path / "again", progress=False)
 
 
 @pytest.mark.slow

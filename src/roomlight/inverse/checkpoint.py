@@ -32,9 +32,10 @@ def _trainable(light) -> dict[str, torch.nn.Parameter]:
 
 
 def save_fit_state(path, fitter, next_iteration: int, best: tuple, history: list[dict], nonfinite: int,
-                   in_a_row: int) -> None:
+                   in_a_row: int, tag: dict | None = None) -> None:
     """Write the state of ``fitter`` (a :class:`~roomlight.inverse.fitter.Fitter`) after
-    ``next_iteration`` iterations; ``best`` is the run loop's (loss, iteration, state dict or None)."""
+    ``next_iteration`` iterations; ``best`` is the run loop's (loss, iteration, state dict or None);
+    ``tag`` describes what is being fitted (checked on loading)."""
     from safetensors.torch import save_file
 
     path = Path(path)
@@ -54,13 +55,13 @@ def save_fit_state(path, fitter, next_iteration: int, best: tuple, history: list
     meta = {"format": FORMAT, "version": VERSION, "next_iteration": int(next_iteration),
             "best_loss": best[0], "best_iteration": best[1], "history": history, "nonfinite": nonfinite,
             "in_a_row": in_a_row, "param_groups": opt["param_groups"], "parameters": list(params),
-            "config": fitter.config.to_dict()}
+            "config": fitter.config.to_dict(), "tag": tag}
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     save_file(tensors, str(tmp), metadata={"state": json.dumps(meta)})
     os.replace(tmp, path)
 
 
-def load_fit_state(path, fitter) -> dict:
+def load_fit_state(path, fitter, tag: dict | None = None) -> dict:
     """Restore a state written by :func:`save_fit_state` into ``fitter`` (parameters, Adam, the
     generator) and return the run loop's bookkeeping: ``next_iteration``, ``best`` (loss,
     iteration, full state dict or None), ``history``, ``nonfinite``, ``in_a_row``."""
@@ -76,6 +77,9 @@ def load_fit_state(path, fitter) -> dict:
                              "delete it to start the fit over") from None
     if meta.get("format") != FORMAT:
         raise RoomlightError(f"{path}: not a roomlight fit state; delete it to start the fit over")
+    if json.loads(json.dumps(tag)) != meta.get("tag"):
+        raise RoomlightError(f"{path}: the saved fit is of another input or method; start over (delete the file, "
+                             "or --restart) or write to another folder")
     if meta.get("config") != fitter.config.to_dict():
         changed = sorted(k for k in set(meta.get("config", {})) | set(fitter.config.to_dict())
                          if meta.get("config", {}).get(k) != fitter.config.to_dict().get(k))

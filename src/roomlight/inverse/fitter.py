@@ -210,7 +210,7 @@ class Fitter:
 
     # ------------------------------------------------------------------ loop and bookkeeping
     def run(self, progress: bool = True, history_path: Path | None = None, state_path: Path | None = None,
-            checkpoint_every: int = 0) -> FitResult:
+            checkpoint_every: int = 0, state_tag: dict | None = None) -> FitResult:
         """All iterations of :meth:`step`, with the fixed-seed best-iterate checks, the history
         (``history_path``: one JSON line per iteration), the progress bar and the non-finite
         guard; ends with the best parameters loaded into the light.
@@ -218,6 +218,7 @@ class Fitter:
         With ``state_path``, the state of the fit is saved there every ``checkpoint_every``
         iterations (:mod:`roomlight.inverse.checkpoint`), and a state found there when the run
         starts is restored first, so the run continues where an interrupted one stopped.
+        ``state_tag`` (JSON-friendly) describes what is fitted; a saved state with another tag is refused.
         """
         from roomlight.inverse.checkpoint import load_fit_state, save_fit_state
 
@@ -228,7 +229,7 @@ class Fitter:
         in_a_row = 0
         start = 0
         if state_path is not None and Path(state_path).is_file():
-            restored = load_fit_state(state_path, self)
+            restored = load_fit_state(state_path, self, state_tag)
             start, best, history = restored["next_iteration"], restored["best"], restored["history"]
             nonfinite, in_a_row = restored["nonfinite"], restored["in_a_row"]
         log = open(history_path, "w") if history_path else None
@@ -270,7 +271,7 @@ class Fitter:
                     bar.update()
                 if state_path is not None and checkpoint_every > 0 and it < c.iterations \
                         and (it + 1) % checkpoint_every == 0:
-                    save_fit_state(state_path, self, it + 1, best, history, nonfinite, in_a_row)
+                    save_fit_state(state_path, self, it + 1, best, history, nonfinite, in_a_row, state_tag)
         finally:
             if bar:
                 bar.close()

@@ -312,7 +312,7 @@ def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, n
         _check_size(depth, "depth map", d.shape, image_path, img.shape)
         files["depth"] = str(depth)
     else:
-        est = estimate_geometry(estimator, img, image_path, fov=K.fov_deg if K is not None else None)
+        est = estimate_geometry(estimator, img, image_path)
         d, kind = est.depth, est.kind
         if est.depth.shape != (h, w):
             raise RoomlightError(f"{image_path}: the estimator returned a {d.shape[1]}x{d.shape[0]} depth map for a "
@@ -348,10 +348,6 @@ def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, n
 
 
 # ---------------------------------------------------------------------------------------- writer
-def _replace_into(tmp: Path, final: Path) -> None:
-    os.replace(tmp, final)
-
-
 def write_photo_case(folder, image: np.ndarray, depth: np.ndarray, labels: np.ndarray, intrinsics: Intrinsics,
                      depth_kind: str = "radial", normals: np.ndarray | None = None, pitch_deg: float = 0.0,
                      roll_deg: float = 0.0) -> dict[str, Path]:
@@ -380,6 +376,8 @@ def write_photo_case(folder, image: np.ndarray, depth: np.ndarray, labels: np.nd
                              "must have one size")
     if lab.min() < 0 or lab.max() > 65535:
         raise RoomlightError("photo case: labels must lie in [0, 65535]")
+    if (intrinsics.width, intrinsics.height) != (w, h):
+        raise RoomlightError(f"photo case: intrinsics are for {intrinsics.width}x{intrinsics.height}, the image is {w}x{h}")
     paths: dict[str, Path] = {}
     tag = f".tmp-{os.getpid()}"
 
@@ -387,7 +385,7 @@ def write_photo_case(folder, image: np.ndarray, depth: np.ndarray, labels: np.nd
         final = out / name
         tmp = out / f".{name}{tag}{final.suffix}"
         write(tmp)
-        _replace_into(tmp, final)
+        os.replace(tmp, final)
         paths[name.split(".")[0]] = final
 
     put("image.exr", lambda p: write_exr(p, {c: img[..., i] for i, c in enumerate("RGB")}))
@@ -400,7 +398,5 @@ def write_photo_case(folder, image: np.ndarray, depth: np.ndarray, labels: np.nd
     put("preview.png", lambda p: save_png(p, np.rint(linear_to_srgb(img) * 255).astype(np.uint8)))
     case = PhotoCase(img, np.asarray(depth, np.float32), depth_kind, intrinsics,
                      ObjectLabels(lab.astype(np.int32), "labels", []), pitch_deg=pitch_deg, roll_deg=roll_deg)
-    if (intrinsics.width, intrinsics.height) != (w, h):
-        raise RoomlightError(f"photo case: intrinsics are for {intrinsics.width}x{intrinsics.height}, the image is {w}x{h}")
     put("camera.json", lambda p: p.write_text(json.dumps(case.camera_json(), indent=2)))
     return paths

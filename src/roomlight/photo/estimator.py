@@ -179,7 +179,7 @@ def resolve_estimator(spec):
     return fn
 
 
-def estimate_geometry(estimator, image_linear: np.ndarray, image_path, fov: float | None = None) -> GeometryEstimate:
+def estimate_geometry(estimator, image_linear: np.ndarray, image_path) -> GeometryEstimate:
     """Run ``estimator`` (see :func:`resolve_estimator`; None: MoGe when installed) on a linear photo.
 
     Raises a one-line error naming the image when no estimator can run: then ``--depth`` is needed.

@@ -185,6 +185,19 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
     raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_METHODS)}")
 
 
+def _state_tag(method: str, case, light: LightModel) -> dict:
+    """What a saved fit state must have been made for: the method, its light, and the photograph
+    (a digest of the image, depth and labels), so a state is never resumed for another fit."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for a in (case.image, case.depth, case.objects.labels):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return {"method": method, "light": type(light).__name__, "kind": str(light.kind), "photo": h.hexdigest()[:16],
+            "depth_kind": case.depth_kind, "intrinsics": case.intrinsics.to_dict(),
+            "pitch_roll": [case.pitch_deg, case.roll_deg]}
+
+
 def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None, model=None, out_dir=None,
               progress: bool = True, light: LightModel | None = None, transform: SceneTransform | None = None,
               materials: ObjectMaterials | None = None, resume: bool = True) -> PhotoFit:
@@ -219,7 +232,8 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
         transform = level_transform(case)
     timings["initialisation"] = time.perf_counter() - t0
 
-    materials = materials or ObjectMaterials(geometry.labels_present)
+    if materials is None:
+        materials = ObjectMaterials(geometry.labels_present)
     photo_model = PhotoModel(light, materials)
     sensor = photo_sensor(geometry.intrinsics, transform)
     escene = EmitterScene(light.kind, light.resolution, objects=object_shapes(geometry.objects, transform),
@@ -242,7 +256,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
             state.unlink()
     t0 = time.perf_counter()
     result = fitter.run(progress=progress, history_path=out / "history.jsonl" if out else None, state_path=state,
-                        checkpoint_every=config.checkpoint_every)
+                        checkpoint_every=config.checkpoint_every, state_tag=_state_tag(method, case, light))
     result.method = method
     timings["fit"] = time.perf_counter() - t0
     t0 = time.perf_counter()

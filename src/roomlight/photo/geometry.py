@@ -167,9 +167,10 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
     if not objects:
         raise RoomlightError(f"{case.files.get('mask', 'mask')}: no object keeps a triangle of the depth mesh at "
                              f"{gw}x{gh}; raise geometry_size or check the mask against the depth map")
-    if skipped:
-        case.notes.append(f"objects {', '.join(map(str, skipped))} are too small for the {gw}x{gh} depth mesh and "
-                          "are left out")
+    note = (f"objects {', '.join(map(str, skipped))} are too small for the {gw}x{gh} depth mesh and are left out"
+            if skipped else None)
+    if note and note not in case.notes:
+        case.notes.append(note)
 
     # --- render resolution: the target, the loss mask and the frustum observations
     rh, rw = working_size(h, w, config.render_size)

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from roomlight.photo.config import PhotoFitConfig
-from roomlight.photo.fitter import PhotoFit, fit_photo
+from roomlight.photo.fitter import STATE_FILE, PhotoFit, fit_photo
 
 __all__ = ["PhotoRun", "run_photo"]
 
@@ -49,7 +49,7 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
         folder = out if m == method else out / "compare" / m
         fit = fit_photo(case, m, config, model=model, out_dir=folder, progress=progress, resume=resume)
         write_fit_files(folder, fit, case, config, extra={"compared_with": [x for x in methods if x != m]})
-        (folder / ".fit-state.safetensors").unlink(missing_ok=True)  # finished: the outputs are the result
+        (folder / STATE_FILE).unlink(missing_ok=True)  # finished: the outputs are the result
         say(f"{m}: best iteration {fit.result.best_iteration} (fixed-seed loss {fit.result.best_loss:.4g}) "
             f"in {fit.timings['fit']:.1f} s -> {folder}")
         fits.append(fit)
