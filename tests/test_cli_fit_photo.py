@@ -4,6 +4,7 @@ problem; a run on a rendered photo writes every output."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,7 +15,11 @@ from roomlight.cli.main import cli
 
 
 def run(*args):
-    return CliRunner().invoke(cli, ["fit-photo", *[str(a) for a in args]], catch_exceptions=False)
+    args = [str(a) for a in args]
+    result = CliRunner().invoke(cli, ["fit-photo", *args], catch_exceptions=False)
+    if result.exit_code == 2 and "--out" in args:  # a refused input leaves no output folder behind
+        assert not Path(args[args.index("--out") + 1]).exists(), result.output
+    return result
 
 
 @pytest.fixture
@@ -137,7 +142,7 @@ def test_fit_photo_writes_every_output(tmp_path):
             "--compare", "direct-envmap", "--set", "probe_count=2", "--set", "probe_spp=4",
             "--set", "probe_resolution=16", "--set", "init_samples=2", "--set", "placement_steps=10")
     assert r.exit_code == 0, r.output
-    for name in ("panorama.exr", "emitter/scene.xml", "emitter/emitter.ply", "materials.json", "render.png",
+    for name in ("panorama.exr", "emitter/scene.xml", "emitter/emitter.ply", "materials.json", "render.png", "objects.ply",
                  "render.exr", "compare.png", "loss.png", "history.jsonl", "result.json", "probes.png", "probes.json",
                  "compare/direct-envmap/result.json", "compare/direct-envmap/emitter/envmap.exr"):
         assert (out / name).is_file(), name

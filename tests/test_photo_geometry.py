@@ -355,9 +355,7 @@ def test_free_space_points_lie_between_the_camera_and_the_surfaces():
 def test_placement_recovers_a_known_scale_and_position():
     """Points of a box room seen from a known camera position, given in a scaled camera frame, are
     put back where they belong by the frustum depth term."""
-    from roomlight.geometry.analytic import box_room_depth
-    from roomlight.geometry.equirect import pixel_directions
-    from roomlight.geometry.analytic import box_distance
+    from roomlight.geometry.analytic import box_distance, box_room_depth
     from roomlight.photo.placement import place_scene
 
     lo, hi = (-2.0, -1.5, -3.5), (3.0, 1.3, 1.5)
@@ -410,3 +408,57 @@ def test_estimators_callable_module_function_and_moge_conversion(tmp_path):
         pytest.approx((4.0, 4.5, 4.0, 2.7))
     assert np.allclose(est.normals[2, 3], [0.0, 0.6, 0.8])       # up and towards the viewer in our frame
     assert est.depth[0, 0] == 3.0 and est.depth[1, 1] == 3.0      # invalid pixels take the largest valid depth
+
+
+def _fake_moge(monkeypatch, weights: bool):
+    """A stand-in ``moge`` package: MoGe-2's loading and inference interface over a wall 3 m away."""
+    import importlib.machinery
+    import sys
+    import types
+
+    calls = {}
+
+    class FakeMoGe(torch.nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.w = torch.nn.Parameter(torch.zeros(1))
+
+        @classmethod
+        def from_pretrained(cls, name, **kwargs):
+            calls["name"], calls["kwargs"] = name, kwargs
+            if not weights:
+                raise FileNotFoundError("no such file in the local cache")
+            return cls()
+
+        def infer(self, image, apply_mask=True, use_fp16=True):
+            calls["image"] = image
+            _, h, w = image.shape
+            return {"depth": torch.full((h, w), 3.0), "mask": torch.ones(h, w, dtype=torch.bool),
+                    "intrinsics": torch.tensor([[0.8, 0, 0.5], [0, 0.8 * w / h, 0.5], [0, 0, 1.0]]),
+                    "normal": torch.tensor([0.0, 0.0, -1.0]).expand(h, w, 3)}
+
+    for name in ("moge", "moge.model", "moge.model.v2"):
+        mod = types.ModuleType(name)
+        mod.__spec__ = importlib.machinery.ModuleSpec(name, None)
+        monkeypatch.setitem(sys.modules, name, mod)
+    sys.modules["moge.model.v2"].MoGeModel = FakeMoGe
+    return calls
+
+
+def test_moge_adapter_loads_local_weights_only_and_converts(tmp_path, monkeypatch):
+    from roomlight.photo.case import load_photo
+
+    _write_case(tmp_path / "case")
+    (tmp_path / "case" / "depth.exr").unlink()
+    (tmp_path / "case" / "camera.json").unlink()
+    monkeypatch.delenv("ROOMLIGHT_MOGE_MODEL", raising=False)
+    calls = _fake_moge(monkeypatch, weights=True)
+    case = load_photo(tmp_path / "case" / "image.exr", mask=tmp_path / "case" / "mask.png")
+    assert calls["name"] == "Ruicheng/moge-2-vitl-normal" and calls["kwargs"] == {"local_files_only": True}
+    assert tuple(calls["image"].shape) == (3, 24, 32) and float(calls["image"].max()) <= 1.0  # sRGB in [0, 1]
+    assert case.depth_kind == "z" and np.all(case.depth == 3.0)
+    assert case.intrinsics.fx == pytest.approx(0.8 * 32) and case.intrinsics.cx == pytest.approx(16.0)
+    assert np.allclose(case.normals, [0.0, 0.0, 1.0])  # facing the camera in roomlight's frame
+    _fake_moge(monkeypatch, weights=False)
+    with pytest.raises(RoomlightError, match=r"image.exr: the moge estimator cannot run: MoGe weights .* --depth FILE"):
+        load_photo(tmp_path / "case" / "image.exr", mask=tmp_path / "case" / "mask.png", fov=60)

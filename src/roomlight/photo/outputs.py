@@ -68,6 +68,21 @@ def light_view(fit, name: str | None = None):
                      {lab: fit.materials.bsdf(lab) for lab in fit.materials.labels})
 
 
+def _write_objects(path: Path, fit) -> None:
+    """The objects' meshes in the light's room frame (the frame of ``panorama.exr`` and ``emitter/``),
+    each vertex coloured with its object's fitted albedo (linear RGB)."""
+    from roomlight.io import write_ply
+
+    verts, faces, colours, offset = [], [], [], 0
+    albedo = {lab: fit.materials.values().detach()[k, :3].numpy() for k, lab in enumerate(fit.materials.labels)}
+    for o in fit.geometry.objects:
+        verts.append(fit.transform.points(o.vertices))
+        faces.append(o.faces + offset)
+        colours.append(np.broadcast_to(albedo[o.label], (len(o.vertices), 3)))
+        offset += len(o.vertices)
+    write_ply(path, np.concatenate(verts), np.concatenate(faces), vertex_colors=np.concatenate(colours))
+
+
 def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[str, Path]:
     """Write one fit's files (module docstring) into ``out``; returns them by role."""
     from roomlight.emitter.export import export_emitter
@@ -108,6 +123,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
     strip = np.concatenate([_srgb8(target), _srgb8(img), err_rgb], axis=1)
     paths["compare"] = atomic_write(out / "compare.png", lambda p: save_png(p, strip))
     paths["loss"] = atomic_write(out / "loss.png", lambda p: plot_history(r.history, p, title=f"fit-photo {fit.method}"))
+    paths["objects"] = atomic_write(out / "objects.ply", lambda p: _write_objects(p, fit))
 
     g = fit.geometry
     objects = [{"label": o.label, "mesh_vertices": len(o.vertices), "mesh_triangles": len(o.faces),

@@ -41,8 +41,7 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
     from roomlight.photo.probes import LightView, choose_probe_sites, probe_figure, render_probes
 
     t_start = time.perf_counter()
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = Path(out)  # created by the first fit, once its inputs are accepted
     methods = [method] + [m for m in dict.fromkeys(compare) if m != method]
     fits, folders = [], []
     for m in methods:
