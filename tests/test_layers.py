@@ -24,6 +24,7 @@ LAYERS = [
     ["photobench"],
     ["export"],
     ["eval", "bench", "synth", "prepare"],
+    ["photo"],
     ["inverse", "data"],
     ["scene", "fit", "losses", "model", "examples"],
     ["render"],

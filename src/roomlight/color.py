@@ -23,6 +23,7 @@ __all__ = [
     "REC709_LUMA", "LOG_EPS", "MIDDLE_GREY", "DISPLAY_GAMMA",
     "luminance_np", "luminance_torch", "log_average_np", "log_average_torch",
     "to_display", "to_display_torch", "to_display_at_key", "display_to_uint8", "display_to_linear",
+    "srgb_to_linear", "linear_to_srgb",
 ]
 
 #: Rec.709 / sRGB luminance weights of linear RGB.
@@ -146,3 +147,19 @@ def display_to_uint8(display) -> np.ndarray:
 def display_to_linear(display, gamma: float = DISPLAY_GAMMA):
     """Inverse of the display gamma: ``x ** gamma`` for display values in [0, 1] (numpy or torch)."""
     return display ** gamma
+
+
+def srgb_to_linear(encoded):
+    """The sRGB transfer function undone (IEC 61966-2-1): encoded values in [0, 1] -> linear.
+
+    Photographs (8-bit PNG/JPEG from cameras and phones) are sRGB-encoded; roomlight's own 8-bit
+    previews use :data:`DISPLAY_GAMMA` instead. numpy in, float64 numpy out (any shape).
+    """
+    x = np.asarray(encoded, dtype=np.float64)
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(linear):
+    """The sRGB transfer function: linear values (clipped to [0, 1]) -> encoded values in [0, 1]."""
+    x = np.clip(np.nan_to_num(np.asarray(linear, dtype=np.float64), nan=0.0, posinf=1.0), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1.0 / 2.4) - 0.055)

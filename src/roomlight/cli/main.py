@@ -33,6 +33,7 @@ def cli(threads):
       roomlight train --data DIR --out RUN     train the prior on panoramas
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
+      roomlight fit-photo IMAGE --out DIR   light + materials from one photograph
       roomlight bench make|run|report      the synthetic benchmark
       roomlight view PATH --out page.html  an interactive viewer of a 2.5D light
       roomlight export PATH --out light.glb   the light for Blender / three.js / USD
@@ -42,11 +43,11 @@ def cli(threads):
 
 
 def _register():
-    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, experiment, export, fit, fit_pano, info,
-                               prepare, render, sample, synth, train, view)
+    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, experiment, export, fit, fit_pano,
+                               fit_photo, info, prepare, render, sample, synth, train, view)
 
-    for mod in (info, emitter, render, synth, prepare, data, train, fit_pano, eval_prior, sample, convert, fit, bench,
-                demo, view, export, experiment):
+    for mod in (info, emitter, render, synth, prepare, data, train, fit_pano, eval_prior, sample, convert, fit,
+                fit_photo, bench, demo, view, export, experiment):
         cli.add_command(mod.command)
 
 

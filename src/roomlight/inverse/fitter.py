@@ -152,14 +152,26 @@ class Fitter:
         sub = self.mask & keep
         return sub if bool(sub.any()) else self.mask
 
-    def evaluate(self) -> float:
-        """The objective of the current parameters at the fixed seed (no gradients)."""
+    def evaluate_terms(self) -> dict[str, float]:
+        """Every term of the objective of the current parameters at the fixed seed (no gradients)."""
         c = self.config
         with torch.no_grad():
             rad, depth = self.light.emitter()
             self.escene.set_emitter(rad, depth)
+            self.escene.set_parameters(self.light.scene_values())
             img = self.escene.render(spp=c.eval_spp or c.spp, seed=c.seed + EVAL_SEED_OFFSET, sensor=self.sensor)
-            return float(self.terms(img, rad, depth, self.mask)["total"])
+            return {k: float(v) for k, v in self.terms(img, rad, depth, self.mask).items()}
+
+    def evaluate(self) -> float:
+        """The objective of the current parameters at the fixed seed (no gradients)."""
+        return self.evaluate_terms()["total"]
+
+    def update(self) -> float:
+        """Apply the gradients now in the parameters: global-norm clip, then one Adam step.
+        Returns the gradient norm before clipping."""
+        gnorm = float(torch.nn.utils.clip_grad_norm_(self.params, self.config.grad_clip))
+        self.optimizer.step()
+        return gnorm
 
     # ------------------------------------------------------------------ one step
     def step(self, it: int) -> dict:
@@ -178,7 +190,7 @@ class Fitter:
         rad, depth = self.light.emitter()
         seed = c.seed + 2 * it
         img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1,
-                                    sensor=self.sensor)
+                                    sensor=self.sensor, extra=self.light.scene_values())
         terms = self.terms(img, rad, depth, self._mask_subset())
         loss = terms["total"]
         ok = bool(torch.isfinite(loss))
@@ -186,8 +198,7 @@ class Fitter:
             loss.backward()
             ok = all(p.grad is None or bool(torch.isfinite(p.grad).all()) for p in self.params)
         if ok:
-            gnorm = float(torch.nn.utils.clip_grad_norm_(self.params, c.grad_clip))
-            self.optimizer.step()
+            gnorm = self.update()
         else:
             # Skip: parameters and Adam's moments stay as they were.
             self.optimizer.zero_grad(set_to_none=True)
@@ -198,24 +209,42 @@ class Fitter:
         return record
 
     # ------------------------------------------------------------------ loop and bookkeeping
-    def run(self, progress: bool = True, history_path: Path | None = None) -> FitResult:
+    def run(self, progress: bool = True, history_path: Path | None = None, state_path: Path | None = None,
+            checkpoint_every: int = 0, state_tag: dict | None = None) -> FitResult:
         """All iterations of :meth:`step`, with the fixed-seed best-iterate checks, the history
         (``history_path``: one JSON line per iteration), the progress bar and the non-finite
-        guard; ends with the best parameters loaded into the light."""
+        guard; ends with the best parameters loaded into the light.
+
+        With ``state_path``, the state of the fit is saved there every ``checkpoint_every``
+        iterations (:mod:`roomlight.inverse.checkpoint`), and a state found there when the run
+        starts is restored first, so the run continues where an interrupted one stopped.
+        ``state_tag`` (JSON-friendly) describes what is fitted; a saved state with another tag is refused.
+        """
+        from roomlight.inverse.checkpoint import load_fit_state, save_fit_state
+
         c = self.config
         best = (float("inf"), -1, None)
         history: list[dict] = []
         nonfinite = 0
         in_a_row = 0
+        start = 0
+        if state_path is not None and Path(state_path).is_file():
+            restored = load_fit_state(state_path, self, state_tag)
+            start, best, history = restored["next_iteration"], restored["best"], restored["history"]
+            nonfinite, in_a_row = restored["nonfinite"], restored["in_a_row"]
         log = open(history_path, "w") if history_path else None
+        if log:
+            for record in history:
+                log.write(json.dumps(record) + "\n")
+            log.flush()
         bar = None
         if progress:
             from roomlight.progress import progress_bar
 
-            bar = progress_bar(total=c.iterations, desc="fit", unit="it")
+            bar = progress_bar(total=c.iterations, initial=start, desc="fit", unit="it")
         t_start = time.perf_counter()
         try:
-            for it in range(c.iterations + 1):
+            for it in range(start, c.iterations + 1):
                 record: dict = {"iteration": it}
                 if it % max(c.eval_every, 1) == 0 or it == c.iterations:
                     value = self.evaluate()
@@ -240,6 +269,9 @@ class Fitter:
                 if bar and it < c.iterations:
                     bar.set_postfix(loss=f"{record['total']:.4g}", best=f"{best[0]:.4g}@{best[1]}")
                     bar.update()
+                if state_path is not None and checkpoint_every > 0 and it < c.iterations \
+                        and (it + 1) % checkpoint_every == 0:
+                    save_fit_state(state_path, self, it + 1, best, history, nonfinite, in_a_row, state_tag)
         finally:
             if bar:
                 bar.close()

@@ -48,6 +48,12 @@ class LightModel(torch.nn.Module):
         """JSON-friendly summary of the current parameters (logged per iteration)."""
         return {}
 
+    def scene_values(self) -> dict[str, torch.Tensor]:
+        """Further scene parameters this model drives, by their ``mi.traverse`` key (e.g. the
+        materials of the objects, fitted jointly with the light); written into the scene with
+        every render. None by default."""
+        return {}
+
 
 class PriorLight(LightModel):
     """The paper's method: optimise (z, s) through a frozen decoder."""

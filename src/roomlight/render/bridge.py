@@ -17,7 +17,8 @@ __all__ = ["render_differentiable"]
 
 def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: torch.Tensor | None = None,
                           spp: int = 16, seed: int = 0, seed_grad: int | None = None,
-                          spp_grad: int | None = None, sensor: int | object = 0) -> torch.Tensor:
+                          spp_grad: int | None = None, sensor: int | object = 0,
+                          extra: dict[str, torch.Tensor] | None = None) -> torch.Tensor:
     """Differentiable render of ``escene`` lit by (radiance, depth).
 
     Args:
@@ -31,6 +32,9 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
             from ``seed`` so that the gradient's noise is independent of the primal's.
         spp_grad: samples per pixel of the adjoint pass (default ``spp``).
         sensor: index of the scene's sensor to render, or a Mitsuba sensor object (e.g. a cropped copy).
+        extra: more differentiable scene parameters by their ``mi.traverse`` key, e.g. an object's
+            ``"obj.bsdf.base_color.value"`` (3,) or ``"obj.bsdf.roughness.value"`` (1,); see
+            :meth:`EmitterScene.parameter_value` for the accepted types.
     Returns:
         (H_img, W_img, 3) float32 linear image on the variant's device, attached to torch's
         autograd graph.
@@ -47,12 +51,15 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
     depth = depth.float().to(device) if depth is not None else None
     tex = escene.texture_value(radiance)
     verts = escene.vertex_value(depth)
+    extra = {k: v.float().to(device) for k, v in (extra or {}).items()}
 
     @dr.wrap(source="torch", target="drjit")
-    def _render(tex_dr, verts_dr):
+    def _render(tex_dr, verts_dr, extra_dr):
+        for key, value in extra_dr.items():
+            escene.params[key] = escene.parameter_value(key, value)
         escene.write_emitter_values(tex_dr, verts_dr.array if verts_dr is not None else None)
         return mi.render(escene.scene, escene.params, spp=spp, seed=seed, seed_grad=seed_grad,
                          spp_grad=spp_grad or spp, sensor=sensor)
 
-    img = _render(tex, verts)
+    img = _render(tex, verts, extra)
     return img[..., :3]

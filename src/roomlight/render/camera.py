@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 from roomlight.errors import RoomlightError
 from roomlight.render.variant import mitsuba
 
-__all__ = ["perspective_sensor", "cropped_sensor"]
+__all__ = ["perspective_sensor", "pinhole_sensor", "cropped_sensor"]
 
 
 def perspective_sensor(origin=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0),
@@ -34,6 +36,26 @@ def perspective_sensor(origin=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0,
                  "rfilter": {"type": pixel_filter}},
         "sampler": {"type": "independent"},
     }
+
+
+def pinhole_sensor(fx: float, cx: float, cy: float, width: int, height: int, origin=(0.0, 0.0, 0.0),
+                   forward=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0), pixel_filter: str = "box") -> dict:
+    """Mitsuba ``perspective`` sensor of a photograph's pinhole camera given in pixels.
+
+    Pixel coordinates have (0, 0) at the image's top-left corner and pixel centres at +0.5; the
+    focal length ``fx`` (square pixels) and the principal point (``cx``, ``cy``) are in pixels of the
+    ``width`` x ``height`` film. The camera sits at ``origin`` looking along ``forward`` with ``up``
+    towards the image's top. Mitsuba's ``principal_point_offset_x`` / ``_y`` (fractions of the film's
+    width / height) move the principal point from the film's centre to the left / upwards, so they
+    are 0.5 - cx / W and 0.5 - cy / H.
+    """
+    if not fx > 0:
+        raise RoomlightError(f"camera: the focal length must be positive, got {fx}")
+    sensor = perspective_sensor(origin, [o + f for o, f in zip(map(float, origin), map(float, forward))], up,
+                                math.degrees(2.0 * math.atan(width / (2.0 * fx))), width, height, pixel_filter)
+    sensor["principal_point_offset_x"] = 0.5 - float(cx) / width
+    sensor["principal_point_offset_y"] = 0.5 - float(cy) / height
+    return sensor
 
 
 def cropped_sensor(sensor: dict, x0: int, y0: int, width: int, height: int) -> dict:

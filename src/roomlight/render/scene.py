@@ -142,6 +142,36 @@ class EmitterScene:
             verts = self.vertex_value(depth.float() if depth is not None else None)
         self.write_emitter_values(tex, self.mi.Float(verts.numpy()) if verts is not None else None)
 
+    def parameter_value(self, key: str, value):
+        """A Dr.Jit tensor (e.g. from :func:`drjit.wrap`) -> the type the scene parameter ``key`` holds.
+
+        Colours (``Color3f``, e.g. a BSDF's ``base_color.value``) take 3 values; scalar fields
+        (``Float``, e.g. ``roughness.value``) take 1. Attached gradients are kept.
+        """
+        import drjit as dr
+
+        mi = self.mi
+        if key not in self.params:
+            raise RoomlightError(f"EmitterScene: the scene has no parameter {key!r}")
+        current = self.params[key]
+        flat = value.array if hasattr(value, "array") else value
+        if isinstance(current, mi.Color3f):
+            if dr.width(flat) != 3:
+                raise ShapeError(f"EmitterScene: {key} is a colour and takes 3 values, got {dr.width(flat)}")
+            return dr.unravel(mi.Color3f, flat)
+        if dr.width(flat) != dr.width(current):
+            raise ShapeError(f"EmitterScene: {key} takes {dr.width(current)} value(s), got {dr.width(flat)}")
+        return flat
+
+    def set_parameters(self, values: dict[str, torch.Tensor]) -> None:
+        """Write plain (non-differentiable) values of scene parameters by key and update the scene."""
+        if not values:
+            return
+        for key, value in values.items():
+            v = self.mi.Float(value.detach().to("cpu", torch.float32).reshape(-1).numpy())
+            self.params[key] = self.parameter_value(key, v)
+        self.params.update()
+
     def cropped_sensor(self, sensor: dict, window: tuple[int, int, int, int]):
         """A Mitsuba sensor that renders only ``window`` = (x0, y0, width, height) pixels of the
         film of ``sensor`` (a sensor dict of this scene's camera, see

@@ -1,0 +1,265 @@
+"""Fitting a photograph: the light and the objects' materials, jointly (paper §4.3, supp. "Real images").
+
+The loop is the illumination fit's (:class:`~roomlight.inverse.fitter.Fitter`: render, censored
+image loss on the object pixels, repulsion, Adam, fixed-seed best iterate, non-finite guard,
+resumable state). A photograph changes four things:
+
+- what is optimised: :class:`PhotoModel` holds the light model *and* the objects' materials,
+  whose values reach the renderer with every render (:meth:`PhotoModel.scene_values`);
+- the objective adds the frustum constraint (:mod:`roomlight.photo.frustum`), and the repulsion
+  points include free space in the view frustum, so the emitter never hides the scene;
+- each step of the latent z is clipped to a norm of ``latent_step_clip`` (instead of clipping the
+  gradient's norm);
+- the start: a large room from N(0, I), the scene placed inside it, a matching exposure
+  (:mod:`roomlight.photo.placement`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from roomlight.errors import RoomlightError
+from roomlight.inverse.fitter import FitResult, Fitter, mask_window
+from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
+from roomlight.photo.config import PhotoFitConfig
+from roomlight.photo.frustum import FrustumTarget, frustum_terms
+from roomlight.photo.geometry import PhotoGeometry, SceneTransform, build_geometry, level_transform
+from roomlight.photo.materials import ObjectMaterials
+
+__all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
+
+#: The methods a photograph can be fitted with: the 2.5D prior and the two env-map baselines.
+PHOTO_METHODS = ("prior", "prior-envmap", "direct-envmap")
+#: The resumable state of a fit in progress, inside the output folder.
+STATE_FILE = ".fit-state.safetensors"
+
+
+class PhotoModel(LightModel):
+    """A light model and the objects' materials, optimised together."""
+
+    def __init__(self, light: LightModel, materials: ObjectMaterials):
+        super().__init__()
+        self.light_model = light
+        self.materials = materials
+        self.kind = light.kind
+
+    @property
+    def resolution(self):
+        return self.light_model.resolution
+
+    @property
+    def latent(self) -> torch.nn.Parameter | None:
+        """The prior's latent z, or None for a light without one."""
+        return getattr(self.light_model, "z", None)
+
+    def emitter(self):
+        return self.light_model.emitter()
+
+    def regularizers(self):
+        return self.light_model.regularizers()
+
+    def describe(self):
+        v = self.materials.values().detach()
+        return {**self.light_model.describe(), "mean_albedo": float(v[:, :3].mean()),
+                "mean_roughness": float(v[:, 3].mean()), "mean_metallic": float(v[:, 4].mean())}
+
+    def scene_values(self):
+        return self.materials.scene_values()
+
+
+class PhotoFitter(Fitter):
+    """The fitting loop with the frustum constraint and the latent step clip (module docstring).
+
+    Args (beyond :class:`Fitter`'s):
+        frustum: the frustum observations in the room frame, or None.
+    """
+
+    def __init__(self, model: PhotoModel, escene, target, mask, points, config: PhotoFitConfig,
+                 sensor_dict=None, window=None, frustum: FrustumTarget | None = None):
+        super().__init__(model, escene, target, mask, points, config, sensor_dict=sensor_dict, window=window)
+        self.frustum = frustum if frustum is not None and len(frustum) else None
+
+    def terms(self, image, radiance, depth, mask):
+        t = super().terms(image, radiance, depth, mask)
+        c = self.config
+        if self.frustum is not None and (c.lambda_frustum > 0 or (depth is not None and c.lambda_frustum_depth > 0)):
+            f = frustum_terms(radiance, depth, self.frustum, c.tau, c.c_max, c.lambda_log, c.log_eps)
+            t.update(f)
+            t["total"] = t["total"] + c.lambda_frustum * f["frustum"]
+            if "frustum_depth" in f:
+                t["total"] = t["total"] + c.lambda_frustum_depth * f["frustum_depth"]
+        return t
+
+    def update(self) -> float:
+        c = self.config
+        grads = [p.grad for p in self.params if p.grad is not None]
+        gnorm = float(torch.linalg.vector_norm(torch.stack([g.norm() for g in grads]))) if grads else 0.0
+        if c.grad_clip > 0:
+            torch.nn.utils.clip_grad_norm_(self.params, c.grad_clip)
+        z = self.light.latent
+        before = z.detach().clone() if z is not None and z.requires_grad else None
+        self.optimizer.step()
+        if before is not None and c.latent_step_clip > 0:
+            with torch.no_grad():
+                step = z - before
+                n = float(step.norm())
+                if n > c.latent_step_clip:
+                    z.copy_(before + step * (c.latent_step_clip / n))
+        return gnorm
+
+
+@dataclass
+class PhotoFit:
+    """A fitted photograph.
+
+    Attributes:
+        method: the method's name.
+        result: the light's :class:`FitResult` (radiance, depth, history, best iterate).
+        model: the fitted :class:`PhotoModel` (best iterate loaded).
+        fitter: the fitter (its ``escene`` holds the objects, the sensor and the fitted light).
+        geometry: the photograph prepared for fitting (camera frame).
+        transform: camera frame -> room frame of the light.
+        objective: every term of the objective at the best iterate (fixed seed).
+        timings: seconds per phase.
+        initial: how the fit started (latent draws, exposure, placement).
+    """
+
+    method: str
+    result: FitResult
+    model: PhotoModel
+    fitter: PhotoFitter
+    geometry: PhotoGeometry
+    transform: SceneTransform
+    objective: dict
+    timings: dict = field(default_factory=dict)
+    initial: dict = field(default_factory=dict)
+
+    @property
+    def materials(self) -> ObjectMaterials:
+        return self.model.materials
+
+
+def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig, model, case) -> tuple:
+    """(light model, scene transform, description of the start) of ``method``."""
+    from roomlight.photo.placement import initial_latent, matching_log_exposure, place_scene
+
+    base = level_transform(case)
+    obs_room_dirs = base.directions(geometry.frustum.rays)
+    if method in ("prior", "prior-envmap"):
+        if model is None:
+            raise RoomlightError(f"method {method!r} needs a trained prior (--model)")
+        z0, medians = initial_latent(model, config.init_samples, config.seed)
+        light = PriorLight(model, envmap=method == "prior-envmap", init_exposure=1.0, z_prior=config.z_prior)
+        with torch.no_grad():
+            light.z.copy_(z0.to(light.z.device))
+            rad, depth = model.decode(z0[None].to(next(model.parameters()).device))
+            rad, depth = rad[0].permute(1, 2, 0).cpu(), depth[0, 0].cpu()
+        if method == "prior":
+            repelled = np.concatenate([geometry.object_points, geometry.free_points])
+            transform = place_scene(depth, base.rotation, geometry.frustum.points, repelled, config.margin,
+                                    config.lambda_rep, config.placement_steps)
+            dirs = transform.points(geometry.frustum.points)
+        else:  # at infinity nothing depends on where the scene is
+            transform, dirs = base, obs_room_dirs
+        s0 = matching_log_exposure(rad, dirs, geometry.frustum.radiance, config.tau)
+        with torch.no_grad():
+            light.s.fill_(s0)
+        info = {"latent_draws": len(medians), "median_depths": [round(m, 4) for m in medians],
+                "z_norm": float(z0.norm()), "exposure": math.exp(s0)}
+        return light, transform, info
+    if method == "direct-envmap":
+        from roomlight.color import log_average_np
+
+        obs = geometry.frustum.radiance
+        keep = obs.max(-1) < config.tau
+        level = log_average_np(obs[keep]) if keep.any() else config.init_exposure
+        light = DirectLight("envmap", config.direct_resolution, init_radiance=float(level),
+                            smooth_radiance=config.smooth_radiance, smooth_depth=config.smooth_depth)
+        return light, base, {"initial_radiance": float(level)}
+    raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_METHODS)}")
+
+
+def _state_tag(method: str, case, light: LightModel) -> dict:
+    """What a saved fit state must have been made for: the method, its light, and the photograph
+    (a digest of the image, depth and labels), so a state is never resumed for another fit."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for a in (case.image, case.depth, case.objects.labels):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return {"method": method, "light": type(light).__name__, "kind": str(light.kind), "photo": h.hexdigest()[:16],
+            "depth_kind": case.depth_kind, "intrinsics": case.intrinsics.to_dict(),
+            "pitch_roll": [case.pitch_deg, case.roll_deg]}
+
+
+def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None, model=None, out_dir=None,
+              progress: bool = True, light: LightModel | None = None, transform: SceneTransform | None = None,
+              materials: ObjectMaterials | None = None, resume: bool = True) -> PhotoFit:
+    """Fit the light and the objects' materials of a :class:`~roomlight.photo.case.PhotoCase`.
+
+    Args:
+        method: ``prior`` (2.5D light from the prior), ``prior-envmap`` or ``direct-envmap``.
+        config: the settings (default: the paper's).
+        model: the prior (a PanoVAE) for the prior methods.
+        out_dir: where ``history.jsonl`` and the resumable state go (other outputs:
+            :func:`roomlight.photo.outputs.write_photo_outputs`).
+        light, transform: replace the method's light model and the placement (e.g. a known light
+            with frozen parameters, to fit the materials alone); ``method`` then only names the fit.
+        materials: replaces the default materials (all values 0.5), e.g. with some held fixed.
+        resume: continue from the state saved in ``out_dir`` by an interrupted fit.
+    """
+    from roomlight.render.scene import EmitterScene
+    from roomlight.photo.scene import object_shapes, photo_sensor
+
+    config = (config or PhotoFitConfig()).validate()
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    geometry = build_geometry(case, config)
+    timings["geometry"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    info: dict = {}
+    if light is None:
+        light, placed, info = _initial_light(method, geometry, config, model, case)
+        transform = transform or placed
+    elif transform is None:
+        transform = level_transform(case)
+    timings["initialisation"] = time.perf_counter() - t0
+
+    if materials is None:
+        materials = ObjectMaterials(geometry.labels_present)
+    photo_model = PhotoModel(light, materials)
+    sensor = photo_sensor(geometry.intrinsics, transform)
+    escene = EmitterScene(light.kind, light.resolution, objects=object_shapes(geometry.objects, transform),
+                          sensor=sensor, integrator={"type": "prb", "max_depth": int(config.max_depth)})
+    points = torch.from_numpy(transform.points(np.concatenate([geometry.object_points, geometry.free_points]))).float()
+    frustum = FrustumTarget(transform.points(geometry.frustum.points), transform.directions(geometry.frustum.rays),
+                            geometry.frustum.radiance)
+    target = torch.from_numpy(geometry.target)
+    mask = torch.from_numpy(geometry.loss_mask)
+    window = mask_window(mask) if config.crop_to_mask else None
+    fitter = PhotoFitter(photo_model, escene, target, mask, points, config, sensor_dict=sensor, window=window,
+                         frustum=frustum)
+
+    out = Path(out_dir) if out_dir is not None else None
+    state = None
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        state = out / STATE_FILE
+        if not resume and state.exists():
+            state.unlink()
+    t0 = time.perf_counter()
+    result = fitter.run(progress=progress, history_path=out / "history.jsonl" if out else None, state_path=state,
+                        checkpoint_every=config.checkpoint_every, state_tag=_state_tag(method, case, light))
+    result.method = method
+    timings["fit"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    objective = fitter.evaluate_terms()
+    timings["final_evaluation"] = time.perf_counter() - t0
+    return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info)

@@ -1,0 +1,160 @@
+"""``roomlight fit-photo`` on the command line: bad inputs stop with one line naming the file and the
+problem; a run on a rendered photo writes every output."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from roomlight.cli.main import cli
+
+
+def run(*args):
+    args = [str(a) for a in args]
+    result = CliRunner().invoke(cli, ["fit-photo", *args], catch_exceptions=False)
+    if result.exit_code == 2 and "--out" in args:  # a refused input leaves no output folder behind
+        assert not Path(args[args.index("--out") + 1]).exists(), result.output
+    return result
+
+
+@pytest.fixture
+def files(tmp_path):
+    """A 32 x 24 sRGB photo, a z-depth .npy, an integer mask: every input of the command."""
+    rng = np.random.default_rng(0)
+    Image.fromarray((rng.random((24, 32, 3)) * 255).astype(np.uint8)).save(tmp_path / "photo.png")
+    np.save(tmp_path / "depth.npy", np.full((24, 32), 2.5, np.float32))
+    mask = np.zeros((24, 32), np.uint8)
+    mask[6:14, 4:12] = 1
+    mask[10:20, 18:28] = 2
+    Image.fromarray(mask).save(tmp_path / "mask.png")
+    return tmp_path
+
+
+def _one_line_error(result, *needles):
+    assert result.exit_code == 2, result.output
+    lines = [ln for ln in result.output.splitlines() if ln.strip()]
+    errors = [ln for ln in lines if ln.startswith("error: ")]
+    assert len(errors) == 1 and "Traceback" not in result.output, result.output
+    for needle in needles:
+        assert needle in errors[0], (needle, errors[0])
+    return errors[0]
+
+
+def test_mask_of_another_size(files):
+    Image.fromarray(np.ones((20, 32), np.uint8)).save(files / "small.png")
+    r = run(files / "photo.png", "--depth", files / "depth.npy", "--mask", files / "small.png", "--fov", 60,
+            "--out", files / "out")
+    _one_line_error(r, "small.png", "32x20", "photo.png", "32x24")
+
+
+def test_empty_mask(files):
+    Image.fromarray(np.zeros((24, 32), np.uint8)).save(files / "empty.png")
+    r = run(files / "photo.png", "--depth", files / "depth.npy", "--mask", files / "empty.png", "--fov", 60,
+            "--out", files / "out")
+    _one_line_error(r, "empty.png", "selects no pixel")
+
+
+@pytest.mark.parametrize("value, problem", [(np.nan, "NaN or infinite"), (np.inf, "NaN or infinite"),
+                                            (0.0, "zero or negative"), (-1.0, "zero or negative")])
+def test_bad_depth_values(files, value, problem):
+    d = np.full((24, 32), 2.5, np.float32)
+    d[3, 4] = value
+    np.save(files / "bad.npy", d)
+    r = run(files / "photo.png", "--depth", files / "bad.npy", "--mask", files / "mask.png", "--fov", 60,
+            "--out", files / "out")
+    _one_line_error(r, "bad.npy", problem, "1 of 768 pixels")
+
+
+def test_depth_of_another_size(files):
+    np.save(files / "d2.npy", np.full((12, 16), 2.0, np.float32))
+    r = run(files / "photo.png", "--depth", files / "d2.npy", "--mask", files / "mask.png", "--fov", 60,
+            "--out", files / "out")
+    _one_line_error(r, "d2.npy", "16x12")
+
+
+def test_unknown_intrinsics(files):
+    r = run(files / "photo.png", "--depth", files / "depth.npy", "--mask", files / "mask.png", "--out", files / "out")
+    _one_line_error(r, "photo.png", "unknown camera intrinsics", "--fov", "--intrinsics")
+
+
+def test_bad_intrinsics_text_and_non_square_pixels(files):
+    r = run(files / "photo.png", "--depth", files / "depth.npy", "--mask", files / "mask.png", "--intrinsics", "30,30,16",
+            "--out", files / "out")
+    _one_line_error(r, "fx,fy,cx,cy")
+    r = run(files / "photo.png", "--depth", files / "depth.npy", "--mask", files / "mask.png",
+            "--intrinsics", "30,40,16,12", "--out", files / "out", "--preset", "fast", "--iterations", 1)
+    _one_line_error(r, "photo.png", "square pixels")
+
+
+def test_no_depth_and_no_estimator(files, monkeypatch):
+    import roomlight.photo.estimator as est
+
+    monkeypatch.setattr(est, "moge_available", lambda: False)
+    r = run(files / "photo.png", "--mask", files / "mask.png", "--fov", 60, "--out", files / "out")
+    _one_line_error(r, "photo.png", "--depth FILE", "moge")
+
+
+def test_no_mask_missing_files_and_unreadable_image(files):
+    r = run(files / "photo.png", "--depth", files / "depth.npy", "--fov", 60, "--out", files / "out")
+    _one_line_error(r, "photo.png", "--mask")
+    r = run(files / "nope.png", "--depth", files / "depth.npy", "--mask", files / "mask.png", "--fov", 60,
+            "--out", files / "out")
+    _one_line_error(r, "nope.png", "does not exist")
+    (files / "broken.png").write_bytes(b"not an image")
+    r = run(files / "broken.png", "--depth", files / "depth.npy", "--mask", files / "mask.png", "--fov", 60,
+            "--out", files / "out")
+    _one_line_error(r, "broken.png", "cannot read the image")
+    r = run(files / "photo.png", "--depth", files / "depth.npy", "--mask", files / "mask.png", "--fov", 60,
+            "--out", files / "out", "--set", "render_size=2")
+    _one_line_error(r, "render_size")
+
+
+def test_photo_case_folder_with_a_bad_camera_json(files):
+    case = files / "case"
+    case.mkdir()
+    (case / "image.png").write_bytes((files / "photo.png").read_bytes())
+    (case / "depth.npy").write_bytes((files / "depth.npy").read_bytes())
+    (case / "mask.png").write_bytes((files / "mask.png").read_bytes())
+    (case / "camera.json").write_text(json.dumps({"format": "roomlight.photo-case", "depth_kind": "planar"}))
+    r = run(case, "--out", files / "out")
+    _one_line_error(r, "camera.json", "depth_kind")
+    (case / "camera.json").write_text(json.dumps({"width": 64, "height": 48, "fov_deg": 60}))
+    r = run(case, "--out", files / "out")
+    _one_line_error(r, "camera.json", "64x48", "32x24")
+
+
+@pytest.mark.mitsuba
+@pytest.mark.slow
+def test_fit_photo_writes_every_output(tmp_path):
+    """The command on a rendered photo case: every file of docs/photo.md, readable."""
+    from helpers_photo import bright_wall_room, make_tiny_photo
+    from roomlight.io import read_panorama
+
+    rad, depth = bright_wall_room(16)
+    make_tiny_photo(tmp_path / "case", rad, depth, size=(24, 32), spp=32, key=None)
+    out = tmp_path / "out"
+    r = run(tmp_path / "case", "--out", out, "--preset", "fast", "--iterations", 2, "--spp", 2, "--quiet",
+            "--compare", "direct-envmap", "--set", "probe_count=2", "--set", "probe_spp=4",
+            "--set", "probe_resolution=16", "--set", "init_samples=2", "--set", "placement_steps=10")
+    assert r.exit_code == 0, r.output
+    for name in ("panorama.exr", "emitter/scene.xml", "emitter/emitter.ply", "materials.json", "render.png", "objects.ply",
+                 "render.exr", "compare.png", "loss.png", "history.jsonl", "result.json", "probes.png", "probes.json",
+                 "compare/direct-envmap/result.json", "compare/direct-envmap/emitter/envmap.exr"):
+        assert (out / name).is_file(), name
+    assert not list(out.rglob(".*tmp*")) and not (out / ".fit-state.safetensors").exists()
+    res = json.loads((out / "result.json").read_text())
+    assert res["method"] == "prior" and res["compared_with"] == ["direct-envmap"]
+    assert {"img", "frustum", "frustum_depth", "rep", "total"} <= set(res["objective"])
+    assert [m["label"] for m in res["materials"]] == [1, 2]
+    assert {"geometry", "initialisation", "fit", "outputs"} <= set(res["timings"])
+    assert res["settings"]["iterations"] == 2 and res["camera"]["depth_kind"] == "z"
+    pano = read_panorama(out / "panorama.exr")
+    assert pano.depth is not None and pano.radiance.shape[:2] == pano.depth.shape
+    probes = json.loads((out / "probes.json").read_text())
+    assert len(probes["sites"]) == 2 and probes["rows"] == ["prior", "direct-envmap"]
+    assert "prior: best iteration" in r.output and "probes: 2 positions under 2 light(s)" in r.output
