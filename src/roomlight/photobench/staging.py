@@ -86,11 +86,13 @@ class RayCaster:
         mi = self.mi
         o = np.broadcast_to(np.asarray(origins, np.float64), np.shape(directions))
         d = np.asarray(directions, np.float64)
-        d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+        length = np.linalg.norm(d, axis=-1, keepdims=True)
+        zero = length[:, 0] == 0  # no direction (a point cast at itself): a miss, as a NaN ray would be
+        d = d / np.where(zero[:, None], 1.0, length)
         ray = mi.Ray3f(mi.Point3f(*[mi.Float(o[:, k].astype(np.float32)) for k in range(3)]),
                        mi.Vector3f(*[mi.Float(d[:, k].astype(np.float32)) for k in range(3)]))
         si = self.scene.ray_intersect(ray)
-        valid = np.asarray(si.is_valid(), bool)
+        valid = np.asarray(si.is_valid(), bool) & ~zero
         t = np.where(valid, np.asarray(si.t, np.float64), np.inf)
         n = np.stack([np.asarray(si.n[k], np.float64) for k in range(3)], -1)
         return t, n, o + np.where(valid[:, None], t[:, None], 0.0) * d
