@@ -42,8 +42,12 @@ def kill_when(args, ready, sig: int, seed: int, max_delay: float, timeout: float
     Returns (exit status, stderr). The process must still be running when the signal is sent,
     otherwise the test would not test an interruption.
     """
+    # A test run started in the background by a non-interactive shell (`make test &`) inherits SIGINT
+    # as ignored, and Python then never raises KeyboardInterrupt: give the child the default disposition,
+    # as a terminal's foreground job has, so that the signal is really delivered.
     proc = subprocess.Popen([sys.executable, "-m", "roomlight.cli.main", *map(str, args)], env=ENV, text=True,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     t_end = time.monotonic() + timeout
     while not ready():
         assert proc.poll() is None, f"finished before it could be interrupted: {proc.stderr.read()[-2000:]}"
