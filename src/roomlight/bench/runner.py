@@ -110,19 +110,20 @@ def list_cases(bench_dir, methods, shard=(0, 1)) -> list[Case]:
     return cases[i::n]
 
 
-def _write_json(path: Path, data) -> None:
+def write_json(path: Path, data) -> None:
+    """Write ``data`` as indented JSON through a temporary file, so a reader never sees half of it."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(data, indent=2, default=_json_default))
     os.replace(tmp, path)
 
 
 def _json_default(obj):
-    if isinstance(obj, (np.generic,)):
+    if isinstance(obj, np.generic):
         return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
     if isinstance(obj, Path):
         return str(obj)
-    if isinstance(obj, tuple):
-        return list(obj)
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
@@ -194,7 +195,7 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
     err = cdir / "error.json"
     if err.exists():
         err.unlink()
-    _write_json(cdir / RESULT, record)
+    write_json(cdir / RESULT, record)
     return record
 
 
@@ -247,7 +248,7 @@ def _check_run_file(out: Path, settings: dict) -> None:
                 if key in old and old[key] != settings[key]:
                     raise BenchError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
                                      f"now {settings[key]!r}); use another --out, or delete it to start over")
-    _write_json(f, settings)
+    write_json(f, settings)
 
 
 def _attempt(c: Case, out: Path, fit, fit_config, model, eval_spp: int, max_depth: int,
@@ -262,7 +263,7 @@ def _attempt(c: Case, out: Path, fit, fit_config, model, eval_spp: int, max_dept
     except Exception as exc:  # one failed case must not stop a long run
         cdir = c.directory(out)
         cdir.mkdir(parents=True, exist_ok=True)
-        _write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
+        write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
                                           "traceback": traceback.format_exc()})
         return name, f"{type(exc).__name__}: {exc}"
 

@@ -26,7 +26,6 @@ Runs resume (a case with a ``result.json`` is skipped); ``shard=(i, n)`` takes c
 from __future__ import annotations
 
 import json
-import os
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -34,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from roomlight.bench.runner import write_json
 from roomlight.errors import RoomlightError
 from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.photobench.builder import read_photo_manifest
@@ -79,22 +79,6 @@ def list_photo_cases(bench_dir, methods, shard=(0, 1)) -> list[PhotoCase]:
     cases = [PhotoCase(p["id"], bench / p["case"], m) for p in manifest["photos"] for m in methods]
     i, n = shard
     return cases[i::n]
-
-
-def _write_json(path: Path, data) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=_plain))
-    os.replace(tmp, path)
-
-
-def _plain(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
 def _recovered(fit: dict) -> RecoveredLight:
@@ -147,7 +131,7 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
               "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
                         **({"fit": "fit"} if case.method not in ORACLES else {})}}
     (cdir / "error.json").unlink(missing_ok=True)
-    _write_json(cdir / RESULT, record)
+    write_json(cdir / RESULT, record)
     return record
 
 
@@ -163,7 +147,7 @@ def _check_run_file(out: Path, settings: dict) -> None:
                 if key in old and old[key] != settings[key]:
                     raise RoomlightError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
                                          f"now {settings[key]!r}); use another --out, or delete it to start over")
-    _write_json(f, settings)
+    write_json(f, settings)
 
 
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
@@ -215,7 +199,7 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
             except Exception as exc:  # one failed case must not stop a long run
                 cdir = c.directory(out)
                 cdir.mkdir(parents=True, exist_ok=True)
-                _write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
+                write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
                                                   "traceback": traceback.format_exc()})
                 summary.failed[name] = f"{type(exc).__name__}: {exc}"
                 if bar is not None:
