@@ -238,15 +238,21 @@ def build_panorama(path: Path, out_dir: Path, config: BenchConfig, progress=None
     return json.loads(text)  # plain JSON types, as a resumed build reads it back
 
 
-def _done_record(pano_dir: Path, config: BenchConfig) -> dict | None:
-    f = pano_dir / "panorama.json"
-    if not f.is_file():
+def read_record(path: Path, settings: dict) -> dict | None:
+    """The JSON record at ``path`` when it exists, parses and was written with these ``settings``
+    (its ``config`` entry); None otherwise, so the work it records is done again."""
+    if not path.is_file():
         return None
     try:
-        rec = json.loads(f.read_text())
+        rec = json.loads(path.read_text())
     except ValueError:
         return None
-    if rec.get("config") != config.scene_settings():
+    return rec if rec.get("config") == settings else None
+
+
+def _done_record(pano_dir: Path, config: BenchConfig) -> dict | None:
+    rec = read_record(pano_dir / "panorama.json", config.scene_settings())
+    if rec is None:
         return None
     if not all((pano_dir.parent / s["scene"]).is_file() for s in rec.get("scenes", [])):
         return None

@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from roomlight.bench.builder import read_record
 from roomlight.errors import RoomlightError
 from roomlight.photobench import case as fmt
 from roomlight.photobench.config import PhotoBenchConfig
@@ -250,14 +251,8 @@ def update_depth(photo_dir: Path, record: dict, config: PhotoBenchConfig) -> dic
 
 def _finished(photo_dir: Path, config: PhotoBenchConfig) -> dict | None:
     """The record of a finished photo built with the same scene settings, else None."""
-    f = photo_dir / fmt.RECORD
-    if not f.is_file():
-        return None
-    try:
-        rec = json.loads(f.read_text())
-    except ValueError:
-        return None
-    if rec.get("config") != config.scene_settings():
+    rec = read_record(photo_dir / fmt.RECORD, config.scene_settings())
+    if rec is None:
         return None
     needed = [fmt.IMAGE, fmt.DEPTH, fmt.MASK, fmt.CAMERA, fmt.TRUE_CAMERA, fmt.TRUE_DEPTH, fmt.PROBES, fmt.MATERIALS, fmt.PROBE_MASK,
               fmt.ORACLE, *[fmt.probe_image_name(m) for m in PROBE_MATERIALS]]
