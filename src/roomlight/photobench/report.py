@@ -27,6 +27,7 @@ import numpy as np
 
 from roomlight.bench.metrics import METRICS
 from roomlight.bench.paired import paired_differences, paired_markdown
+from roomlight.bench.report import collect_failures
 from roomlight.bench.tables import markdown_table, ordered, summarize, write_wide_csv
 from roomlight.errors import RoomlightError
 from roomlight.photobench.objects import PROBE_MATERIALS
@@ -62,17 +63,6 @@ def collect_photo_results(res_dir) -> list[dict]:
         if all(k in rec for k in ("photo", "method", "probes")):
             rec["_dir"] = str(f.parent)
             out.append(rec)
-    return out
-
-
-def _failures(res_dir) -> list[dict]:
-    out = []
-    for f in sorted((Path(res_dir) / "cases").glob("*/*/error.json")):
-        if not (f.parent / RESULT).is_file():
-            try:
-                out.append(json.loads(f.read_text()))
-            except ValueError:
-                out.append({"case": str(f.parent), "error": "unreadable error.json"})
     return out
 
 
@@ -263,7 +253,7 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
     results = collect_photo_results(res_dir)
     if not results:
         raise RoomlightError(f"{res_dir}: no finished case (no result.json under {Path(res_dir) / 'cases'})")
-    failures = _failures(res_dir)
+    failures = collect_failures(res_dir)
     out = Path(out_dir) if out_dir else Path(res_dir) / "report"
     out.mkdir(parents=True, exist_ok=True)
     settings = {}
