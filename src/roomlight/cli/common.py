@@ -152,6 +152,23 @@ def fail(message: str) -> None:
     raise InputError(message)
 
 
+def load_prior(model, method: str, note: str):
+    """The prior of ``--model MODEL`` (a model folder, a training run or the authors' run), or the
+    bundled one when MODEL is None, on the device Mitsuba renders on so that decoded maps reach the
+    renderer without copies. ``note`` is printed to stderr when the bundled prior is taken."""
+    if model is None:
+        from roomlight.demo import bundled_prior_path
+
+        model = bundled_prior_path()
+        if model is None:
+            fail(f"--method {method} needs --model (a trained prior); this installation has no bundled prior")
+        click.echo(note.format(model=model), err=True)
+    from roomlight.model.runs import load_run_model
+    from roomlight.render.variant import torch_device
+
+    return load_run_model(model, device=torch_device())
+
+
 def echo_fixes(fixes) -> None:
     """Report repairs applied to an input (``--clamp-negative``, ``--fill-nonfinite``), one note each."""
     for fix in fixes:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from roomlight.cli.common import default_of, fail, parse_sets
+from roomlight.cli.common import default_of, load_prior, parse_sets
 from roomlight.inverse.config import FIT_PRESETS, FitConfig
 from roomlight.inverse.methods import METHODS, needs_prior
 
@@ -55,20 +55,8 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     cfg = fit_config(preset, **{**overrides, **parse_sets(sets)})
     prior = None
     if needs_prior(method):
-        if model is None:
-            from roomlight.demo import bundled_prior_path
-
-            model = bundled_prior_path()
-            if model is None:
-                fail(f"--method {method} needs --model (a trained prior); this installation has no bundled prior")
-            click.echo(f"note: --method {method} without --model: using the bundled prior ({model}), a small "
-                       "CPU-trained one; pass --model RUN for your own", err=True)
-        from roomlight.render.variant import torch_device
-        from roomlight.model.runs import load_run_model
-
-        # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
-        # on the device Mitsuba renders on, so decoded maps reach the renderer without copies
-        prior = load_run_model(model, device=torch_device())
+        prior = load_prior(model, method, f"note: --method {method} without --model: using the bundled prior "
+                           "({model}), a small CPU-trained one; pass --model RUN for your own")
     result = fit_scene(spec, method, cfg, out_dir=out_dir, model=prior, progress=not quiet)
     click.echo(f"{method}: best iteration {result.best_iteration} (fixed-seed loss {result.best_loss:.4g}) "
                f"in {result.seconds:.1f} s -> {out_dir}")

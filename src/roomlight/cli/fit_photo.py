@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from roomlight.cli.common import FINITE, default_of, fail, parse_sets
+from roomlight.cli.common import FINITE, default_of, load_prior, parse_sets
 from roomlight.photo.config import PHOTO_PRESETS, PhotoFitConfig
 from roomlight.photo.fitter import PHOTO_METHODS
 
@@ -83,18 +83,8 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
         click.echo(f"note: {note}", err=True)
     prior = None
     if any(m.startswith("prior") for m in (method, *compare)):
-        if model is None:
-            from roomlight.demo import bundled_prior_path
-
-            model = bundled_prior_path()
-            if model is None:
-                fail(f"--method {method} needs --model (a trained prior); this installation has no bundled prior")
-            click.echo(f"note: using the bundled prior ({model}), a small CPU-trained one; pass --model RUN for "
-                       "your own", err=True)
-        from roomlight.model.runs import load_run_model
-        from roomlight.render.variant import torch_device
-
-        prior = load_run_model(model, device=torch_device())
+        prior = load_prior(model, method, "note: using the bundled prior ({model}), a small CPU-trained one; pass "
+                           "--model RUN for your own")
     click.echo(f"{case.files['image']}: {case.width}x{case.height}, {len(case.objects.ids)} object(s), "
                f"{case.depth_kind} depth from {case.files['depth']}", err=True)
     run_photo(case, method, cfg, out_dir, model=prior, compare=compare, progress=not quiet, resume=not restart,
