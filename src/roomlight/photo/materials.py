@@ -13,6 +13,7 @@ from __future__ import annotations
 import torch
 
 from roomlight.errors import RoomlightError
+from roomlight.render.materials import principled_bsdf  # noqa: F401  (part of this module's API)
 
 __all__ = ["ObjectMaterials", "object_id", "principled_bsdf", "PARTS"]
 
@@ -23,12 +24,6 @@ PARTS = ("albedo", "roughness", "metallic")
 def object_id(label: int) -> str:
     """The Mitsuba shape id of the object with mask label ``label``."""
     return f"object_{int(label)}"
-
-
-def principled_bsdf(base_color, roughness: float, metallic: float) -> dict:
-    """A Mitsuba ``principled`` BSDF dict (the other principled parameters at Mitsuba's defaults)."""
-    return {"type": "principled", "base_color": {"type": "rgb", "value": [float(c) for c in base_color]},
-            "roughness": float(roughness), "metallic": float(metallic)}
 
 
 class ObjectMaterials(torch.nn.Module):

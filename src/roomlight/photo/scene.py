@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from roomlight.photo.camera import Intrinsics
 from roomlight.photo.geometry import SceneTransform
-from roomlight.photo.materials import object_id, principled_bsdf
+from roomlight.photo.materials import object_id
 from roomlight.photo.unproject import ObjectMesh
+from roomlight.render.materials import principled_bsdf
+from roomlight.render.mesh import mitsuba_mesh
 
 __all__ = ["object_shape", "object_shapes", "photo_sensor"]
 
@@ -15,20 +15,9 @@ __all__ = ["object_shape", "object_shapes", "photo_sensor"]
 def object_shape(obj: ObjectMesh, transform: SceneTransform, bsdf: dict | None = None):
     """A ``mi.Mesh`` (id ``object_<label>``) of one object in the room frame, with its shading
     normals and a BSDF (default: the principled material at 0.5 everywhere)."""
-    from roomlight.render.variant import mitsuba
-
-    mi = mitsuba()
-    v = transform.points(obj.vertices).astype(np.float32)
-    n = transform.directions(obj.normals).astype(np.float32)
-    props = mi.Properties()
-    props["bsdf"] = mi.load_dict(bsdf or principled_bsdf([0.5] * 3, 0.5, 0.5))
-    mesh = mi.Mesh(object_id(obj.label), len(v), len(obj.faces), props, has_vertex_normals=True)
-    p = mi.traverse(mesh)
-    p["vertex_positions"] = mi.Float(v.ravel())
-    p["vertex_normals"] = mi.Float(n.ravel())
-    p["faces"] = mi.UInt(obj.faces.astype(np.uint32).ravel())
-    p.update()
-    return mesh
+    v = transform.points(obj.vertices)
+    n = transform.directions(obj.normals)
+    return mitsuba_mesh(object_id(obj.label), v, obj.faces, bsdf or principled_bsdf([0.5] * 3, 0.5, 0.5), normals=n)
 
 
 def object_shapes(objects: list[ObjectMesh], transform: SceneTransform, bsdfs: dict[int, dict] | None = None) -> dict:

@@ -24,7 +24,8 @@ import torch
 from roomlight.errors import RoomlightError
 from roomlight.photo.camera import Intrinsics, camera_rotation
 from roomlight.photo.geometry import SceneTransform
-from roomlight.photo.materials import principled_bsdf
+from roomlight.render.materials import principled_bsdf
+from roomlight.render.mesh import mitsuba_mesh
 
 __all__ = ["SyntheticObject", "render_photo", "render_photo_case", "read_truth", "example_photo_case",
            "EXAMPLE_OBJECTS"]
@@ -55,17 +56,6 @@ class SyntheticObject:
                 "metallic": float(self.metallic)}
 
 
-def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, bsdf: dict):
-    props = mi.Properties()
-    props["bsdf"] = mi.load_dict(bsdf)
-    m = mi.Mesh(name, len(vertices), len(faces), props)
-    p = mi.traverse(m)
-    p["vertex_positions"] = mi.Float(np.asarray(vertices, np.float32).ravel())
-    p["faces"] = mi.UInt(np.asarray(faces, np.uint32).ravel())
-    p.update()
-    return m
-
-
 def render_photo(radiance: torch.Tensor, depth: torch.Tensor, objects: list[SyntheticObject], intrinsics: Intrinsics,
                  origin=(0.0, 0.0, 0.0), pitch_deg: float = 0.0, roll_deg: float = 0.0, spp: int = 256,
                  seed: int = 0, max_depth: int = 4) -> dict[str, np.ndarray]:
@@ -84,7 +74,7 @@ def render_photo(radiance: torch.Tensor, depth: torch.Tensor, objects: list[Synt
     sensor = photo_sensor(intrinsics, transform)
     mi = mitsuba()
     es = EmitterScene("mesh", tuple(radiance.shape[:2]), sensor=sensor,
-                      objects={f"object_{o.label}": _mesh(mi, f"object_{o.label}", o.vertices, o.faces, o.bsdf())
+                      objects={f"object_{o.label}": mitsuba_mesh(f"object_{o.label}", o.vertices, o.faces, o.bsdf())
                                for o in objects},
                       integrator={"type": "path", "max_depth": int(max_depth)})
     es.set_emitter(radiance, depth)

@@ -20,6 +20,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from roomlight.errors import RoomlightError
+from roomlight.render import mesh as render_mesh
+from roomlight.render.materials import principled_bsdf
 
 __all__ = ["PROBE_MATERIALS", "OBJECT_SHAPES", "PrincipledMaterial", "InsertedObject", "ProbeSphere", "box_mesh",
            "draw_material", "transform_points"]
@@ -63,8 +65,7 @@ class PrincipledMaterial:
 
     def bsdf(self) -> dict:
         """Mitsuba BSDF dict."""
-        return {"type": "principled", "base_color": {"type": "rgb", "value": [float(c) for c in self.albedo]},
-                "roughness": float(self.roughness), "metallic": float(self.metallic)}
+        return principled_bsdf(self.albedo, self.roughness, self.metallic)
 
     def to_dict(self) -> dict:
         return {"albedo": [float(c) for c in self.albedo], "roughness": float(self.roughness),
@@ -148,18 +149,8 @@ class InsertedObject:
 
     def mitsuba_mesh(self, world_to_frame: np.ndarray | None = None):
         """A ``mi.Mesh`` with its principled BSDF."""
-        from roomlight.render.variant import mitsuba
-
-        mi = mitsuba()
         v, f = self.geometry(world_to_frame)
-        props = mi.Properties()
-        props["bsdf"] = mi.load_dict(self.material.bsdf())
-        mesh = mi.Mesh(self.id, len(v), len(f), props)
-        p = mi.traverse(mesh)
-        p["vertex_positions"] = mi.Float(v.astype(np.float32).ravel())
-        p["faces"] = mi.UInt(f.astype(np.uint32).ravel())
-        p.update()
-        return mesh
+        return render_mesh.mitsuba_mesh(self.id, v, f, self.material.bsdf())
 
     def to_dict(self) -> dict:
         d = asdict(self)

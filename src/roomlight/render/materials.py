@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from roomlight.errors import RoomlightError
 
-__all__ = ["MATERIALS", "material"]
+__all__ = ["MATERIALS", "material", "principled_bsdf"]
 
 MATERIALS: dict[str, dict] = {
     "diffuse": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}},
@@ -28,3 +28,10 @@ def material(name: str) -> dict:
     if name not in MATERIALS:
         raise RoomlightError(f"unknown material {name!r}; choose one of {', '.join(MATERIALS)}")
     return copy.deepcopy(MATERIALS[name])
+
+
+def principled_bsdf(base_color, roughness: float, metallic: float) -> dict:
+    """A Mitsuba ``principled`` BSDF dict (its other parameters at Mitsuba's defaults): the
+    material of inserted objects and of objects whose material is fitted."""
+    return {"type": "principled", "base_color": {"type": "rgb", "value": [float(c) for c in base_color]},
+            "roughness": float(roughness), "metallic": float(metallic)}

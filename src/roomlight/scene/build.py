@@ -10,6 +10,7 @@ import torch
 
 from roomlight.color import display_to_linear
 from roomlight.errors import RoomlightError
+from roomlight.render.mesh import mitsuba_mesh
 from roomlight.scene.description import ObjectSpec, SceneError, SceneSpec, ViewSpec, read_scene
 
 __all__ = ["load_scene", "check_scene_files", "object_geometry", "mitsuba_object", "view_objects", "object_points",
@@ -48,18 +49,8 @@ def object_geometry(obj: ObjectSpec) -> tuple[np.ndarray, np.ndarray]:
 
 def mitsuba_object(obj: ObjectSpec):
     """A ``mi.Mesh`` of the object, in world space, with its BSDF."""
-    from roomlight.render.variant import mitsuba
-
-    mi = mitsuba()
     v, f = object_geometry(obj)
-    props = mi.Properties()
-    props["bsdf"] = mi.load_dict(obj.material.bsdf())
-    mesh = mi.Mesh(obj.id, len(v), len(f), props)
-    p = mi.traverse(mesh)
-    p["vertex_positions"] = mi.Float(v.astype(np.float32).ravel())
-    p["faces"] = mi.UInt(f.astype(np.uint32).ravel())
-    p.update()
-    return mesh
+    return mitsuba_mesh(obj.id, v, f, obj.material.bsdf())
 
 
 def view_objects(scene: SceneSpec, view: ViewSpec | str) -> dict:

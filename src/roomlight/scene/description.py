@@ -23,7 +23,7 @@ from roomlight.config import check_keys
 from roomlight.errors import RoomlightError
 
 __all__ = ["SceneError", "CameraSpec", "MaterialSpec", "ObjectSpec", "ViewSpec", "EmitterSpec", "SceneSpec",
-           "load_scene", "save_scene", "parse_scene", "MATERIAL_TYPES"]
+           "save_scene", "parse_scene", "MATERIAL_TYPES"]
 
 SCENE_VERSION = 1
 MATERIAL_TYPES = ("diffuse", "matte", "mirror", "principled", "glossy", "white")

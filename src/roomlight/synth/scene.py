@@ -12,9 +12,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from roomlight.color import luminance_np
+from roomlight.render.mesh import mitsuba_mesh
 from roomlight.render.variant import mitsuba
 from roomlight.synth.color import luminance
 from roomlight.synth.materials import bsdf_dict, emission_texture
@@ -43,20 +42,9 @@ def room_meshes(room: Room) -> dict[str, MeshArrays]:
     return {name: b.build() for name, b in builders.items()}
 
 
-def _mesh(mi, name: str, arrays: MeshArrays, bsdf, emitter=None):
-    props = mi.Properties()
-    props["bsdf"] = bsdf
-    if emitter is not None:
-        props["emitter"] = emitter
-    mesh = mi.Mesh(name, arrays.positions.shape[0], arrays.faces.shape[0], props,
-                   has_vertex_normals=True, has_vertex_texcoords=True)
-    params = mi.traverse(mesh)
-    params["vertex_positions"] = mi.Float(arrays.positions.ravel())
-    params["vertex_normals"] = mi.Float(arrays.normals.ravel())
-    params["vertex_texcoords"] = mi.Float(arrays.uvs.ravel())
-    params["faces"] = mi.UInt(arrays.faces.ravel())
-    params.update()
-    return mesh
+def _mesh(name: str, arrays: MeshArrays, bsdf, emitter=None):
+    return mitsuba_mesh(name, arrays.positions, arrays.faces, bsdf, normals=arrays.normals, uvs=arrays.uvs,
+                        emitter=emitter)
 
 
 def _mean_emission(m) -> float:
@@ -102,13 +90,13 @@ def scene_entries(room: Room, max_depth: int = DEFAULT_MAX_DEPTH, rr_depth: int 
             emitter = mi.load_dict({"type": "area", "radiance": emission_texture(mi, m),
                                     "sampling_weight": float(powers[name] + floor)})
         bsdf = black if m.emission is not None else mi.load_dict(bsdf_dict(mi, m))
-        entries[f"mesh_{name}"] = _mesh(mi, name, arrays, bsdf, emitter)
+        entries[f"mesh_{name}"] = _mesh(name, arrays, bsdf, emitter)
     for k, w in enumerate(room.windows):
         o, a, b = portal_quad(w)
         builder = MeshBuilder()
         builder.quad(o, a, b, "local")
         emitter = portal_emitter(mi, w, room.sky, powers[f"portal_{k}"] + floor)
-        entries[f"portal_{k}"] = _mesh(mi, f"portal_{k}", builder.build(), black, emitter)
+        entries[f"portal_{k}"] = _mesh(f"portal_{k}", builder.build(), black, emitter)
     return entries
 
 
