@@ -549,19 +549,9 @@ def test_cli_make_run_report_and_one_line_errors(built, tmp_path):
     assert not (tmp_path / "y").exists()  # refused before anything is written
 
 
-def test_adapter_names_the_photo_fit_it_needs():
-    from roomlight.photobench.adapter import fit_photo_case, photo_fit_available
-
-    if photo_fit_available():
-        pytest.skip("roomlight.photo is installed: the adapter is exercised by the integration test")
-    with pytest.raises(RoomlightError, match="roomlight.photo"):
-        fit_photo_case("nowhere", "prior", "fast", "out")
-
-
 @pytest.mark.mitsuba
 def test_photo_fit_reads_the_case_as_written(built):
-    """With the photo fit installed: its loader reads the case folder as the benchmark meant it."""
-    pytest.importorskip("roomlight.photo")
+    """The photo fit's loader reads the case folder as the benchmark meant it."""
     from roomlight.photo.case import load_photo
 
     from roomlight.photobench import case as fmt

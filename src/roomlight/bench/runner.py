@@ -44,7 +44,7 @@ from roomlight.bench.metrics import score_view
 from roomlight.bench.rendering import render_view
 
 __all__ = ["Case", "RunSummary", "EVAL_SEEDS", "parse_shard", "list_cases", "run_case", "run_benchmark",
-           "known_methods", "oracle_fit", "ORACLE", "RESULT", "RUN_FILE"]
+           "known_methods", "oracle_fit", "record_failure", "write_json", "ORACLE", "RESULT", "RUN_FILE"]
 
 #: Samples per pixel of the scoring re-renders (the paper uses 4096).
 DEFAULT_EVAL_SPP = 256
@@ -74,7 +74,8 @@ class Case:
 
 @dataclass
 class RunSummary:
-    """What one call of :func:`run_benchmark` did."""
+    """What one call of a benchmark run did (:func:`run_benchmark`, the photo benchmark's run):
+    the names of the cases finished now, skipped as already finished, and failed (name -> error)."""
 
     done: list[str] = field(default_factory=list)
     skipped: list[str] = field(default_factory=list)
@@ -115,6 +116,17 @@ def write_json(path: Path, data) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(data, indent=2, default=_json_default))
     os.replace(tmp, path)
+
+
+def record_failure(case_dir: Path, name: str, exc: BaseException) -> str:
+    """Write the failed case ``name``'s ``error.json`` (message, type, traceback) into ``case_dir``
+    and return the one-line summary a run prints; call it inside the ``except`` block.
+
+    A later run retries the case: only ``result.json`` marks a case as done."""
+    case_dir.mkdir(parents=True, exist_ok=True)
+    write_json(case_dir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
+                                         "traceback": traceback.format_exc()})
+    return f"{type(exc).__name__}: {exc}"
 
 
 def _json_default(obj):
@@ -261,11 +273,7 @@ def _attempt(c: Case, out: Path, fit, fit_config, model, eval_spp: int, max_dept
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # one failed case must not stop a long run
-        cdir = c.directory(out)
-        cdir.mkdir(parents=True, exist_ok=True)
-        write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
-                                          "traceback": traceback.format_exc()})
-        return name, f"{type(exc).__name__}: {exc}"
+        return name, record_failure(c.directory(out), name, exc)
 
 
 def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = DEFAULT_EVAL_SPP,

@@ -5,14 +5,12 @@ needs, in the benchmark's own terms (plain numpy, no photo-fit classes). Everyth
 benchmark (building, scoring, running, reporting) only knows this function's signature and the
 dict it returns, so a change of the photo fit's API is absorbed here.
 
-``roomlight.photo`` is imported by name when a fit is asked for: the benchmark builds, scores
-oracles and is tested where the photo fit is not installed, and the layer order keeps
-``photobench`` above ``photo`` for when it is.
+``roomlight.photo`` is imported when a fit is asked for, not at import time: building the
+benchmark and scoring its oracles do not load the photo fit.
 """
 
 from __future__ import annotations
 
-import importlib
 import time
 from pathlib import Path
 
@@ -20,27 +18,10 @@ import numpy as np
 
 from roomlight.errors import RoomlightError
 
-__all__ = ["PHOTO_FIT_METHODS", "fit_photo_case", "photo_fit_available"]
+__all__ = ["PHOTO_FIT_METHODS", "fit_photo_case"]
 
 #: The methods of ``roomlight fit-photo``.
 PHOTO_FIT_METHODS = ("prior", "prior-envmap", "direct-envmap")
-
-
-def photo_fit_available() -> bool:
-    """Whether the photo fit (:mod:`roomlight.photo`) can be imported here."""
-    try:
-        importlib.import_module("roomlight.photo")
-        return True
-    except ImportError:
-        return False
-
-
-def _photo(name: str):
-    try:
-        return importlib.import_module(f"roomlight.photo.{name}")
-    except ImportError as exc:
-        raise RoomlightError(f"run-photos: the photo fit (roomlight.photo, `roomlight fit-photo`) cannot be imported "
-                             f"here ({exc}); only the oracle methods can run") from None
 
 
 def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, progress: bool = False,
@@ -60,7 +41,11 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
         p = s R p_camera + t), "materials": {label: {"albedo", "roughness", "metallic"}},
         "seconds": fit time}``.
     """
-    case_mod, config_mod, fitter_mod, outputs_mod = (_photo(n) for n in ("case", "config", "fitter", "outputs"))
+    from roomlight.photo import case as case_mod
+    from roomlight.photo import config as config_mod
+    from roomlight.photo import fitter as fitter_mod
+    from roomlight.photo import outputs as outputs_mod
+
     if method not in PHOTO_FIT_METHODS:
         raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_FIT_METHODS)}")
     t0 = time.perf_counter()

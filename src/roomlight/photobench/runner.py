@@ -27,13 +27,12 @@ from __future__ import annotations
 
 import json
 import time
-import traceback
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.runner import write_json
+from roomlight.bench.runner import RunSummary, record_failure, write_json
 from roomlight.errors import RoomlightError
 from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.photobench.builder import read_photo_manifest
@@ -41,7 +40,7 @@ from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_
                                           score_light)
 
 __all__ = ["ORACLES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE", "PhotoCase",
-           "PhotoRunSummary", "list_photo_cases", "run_photo_case", "run_photo_benchmark"]
+           "list_photo_cases", "run_photo_case", "run_photo_benchmark"]
 
 #: Pseudo-methods: the photo's oracle light as a 2.5D light, or shown at infinity.
 ORACLES = {"oracle": "mesh", "oracle-envmap": "envmap"}
@@ -63,13 +62,6 @@ class PhotoCase:
 
     def directory(self, out) -> Path:
         return Path(out) / "cases" / self.photo / self.method
-
-
-@dataclass
-class PhotoRunSummary:
-    done: list[str] = field(default_factory=list)
-    skipped: list[str] = field(default_factory=list)
-    failed: dict[str, str] = field(default_factory=dict)
 
 
 def list_photo_cases(bench_dir, methods, shard=(0, 1)) -> list[PhotoCase]:
@@ -152,7 +144,7 @@ def _check_run_file(out: Path, settings: dict) -> None:
 
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
                         eval_spp: int = DEFAULT_EVAL_SPP, shard=(0, 1), progress: bool = True, fit=None,
-                        model_name: str | None = None, overrides: dict | None = None) -> PhotoRunSummary:
+                        model_name: str | None = None, overrides: dict | None = None) -> RunSummary:
     """Run (a shard of) the photo benchmark; see the module docstring.
 
     Args:
@@ -178,7 +170,7 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
     if model_name is not None:
         settings["model"] = str(model_name)
     _check_run_file(out, settings)
-    summary = PhotoRunSummary()
+    summary = RunSummary()
     todo = []
     for c in cases:
         (summary.skipped if (c.directory(out) / RESULT).is_file() else todo).append(c)
@@ -197,11 +189,7 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
             except KeyboardInterrupt:
                 raise
             except Exception as exc:  # one failed case must not stop a long run
-                cdir = c.directory(out)
-                cdir.mkdir(parents=True, exist_ok=True)
-                write_json(cdir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
-                                                  "traceback": traceback.format_exc()})
-                summary.failed[name] = f"{type(exc).__name__}: {exc}"
+                summary.failed[name] = record_failure(c.directory(out), name, exc)
                 if bar is not None:
                     bar.write(f"run-photos: {name} failed: {exc}")
             if bar is not None:
