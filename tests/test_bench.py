@@ -9,7 +9,6 @@ import pytest
 import torch
 
 from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import psnr_ldr, rmse_hdr
 from roomlight.bench.recording import record_ldr
 from roomlight.errors import RoomlightError
 from roomlight.examples import example_room
@@ -348,8 +347,8 @@ def test_cli_make_run_report(bench, panos, tmp_path):
     r = run("report", tmp_path / "res", "--no-figures", "--quiet")
     assert r.exit_code == 0, r.output
     assert "| oracle | 2.5D AL |" in r.output
-    r = run("run", bench[0], "--out", tmp_path / "res2", "--methods", "prior,direct-al")
-    assert r.exit_code != 0 and "methods prior need --model" in r.output
+    r = run("run", bench[0], "--out", tmp_path / "res2", "--methods", "prior,direct-al", "--model", tmp_path / "nowhere")
+    assert r.exit_code == 2 and "nowhere" in r.output and "Traceback" not in r.output, r.output
     r = run("run", bench[0], "--out", tmp_path / "res2", "--methods", "magic")
     assert r.exit_code == 2 and "error: --methods: unknown method(s) magic" in r.output
     r = run("run", bench[0], "--out", tmp_path / "res2", "--methods", "oracle", "--set", "nonsense=1")

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 
 from roomlight.bench.builder import BenchConfig
 from roomlight.bench.runner import DEFAULT_EVAL_SPP
-from roomlight.cli.common import RESOLUTION, RoomlightGroup, default_of, parse_sets
+from roomlight.cli.common import RESOLUTION, RoomlightGroup, default_of, echo_run_summary, load_prior, parse_sets
 from roomlight.inverse.config import FIT_PRESETS
 
 #: ``--paper`` settings of ``bench make`` (supplementary "Synthetic scene design").
@@ -88,7 +86,8 @@ def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, material
 @click.option("--methods", default=None,
               help="Comma-separated methods [default: all]; 'oracle' re-renders the true emitter (noise floor).")
 @click.option("--model", type=click.Path(), default=None,
-              help="Trained prior (run folder or checkpoint) for the prior methods.")
+              help="Trained prior (run folder or checkpoint) for the prior methods [default: the prior bundled "
+                   "with roomlight].")
 @click.option("--preset", type=click.Choice(list(FIT_PRESETS)), default="paper", show_default=True,
               help="Fit preset: paper (the paper's settings) or fast (CPU-friendly); see `roomlight fit --help`.")
 @click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
@@ -116,27 +115,13 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
     from roomlight.inverse.methods import needs_prior
 
     with_prior = [m for m in (method_list or known_methods()) if needs_prior(m)]
-    prior = None
+    prior = model_name = None
     if with_prior:
-        if model is None:
-            raise click.UsageError(f"methods {', '.join(with_prior)} need --model (a trained prior); "
-                                   "or choose --methods without them")
-        from roomlight.render.variant import torch_device
-        from roomlight.model.runs import load_run_model
-
-        # a model folder, a training run (its best/ or newest checkpoint) or the authors' run;
-        # on the device Mitsuba renders on, so decoded maps reach the renderer without copies
-        prior = load_run_model(model, device=torch_device())
+        prior, model_name = load_prior(model, f"--methods {','.join(with_prior)}")
     spp = eval_spp if eval_spp is not None else (PAPER_EVAL_SPP if paper else DEFAULT_EVAL_SPP)
     summary = run_benchmark(bench, out_dir, method_list, cfg, prior, eval_spp=spp, shard=parse_shard(shard),
-                            progress=not quiet, scheduler=scheduler,
-                            model_name=str(Path(model).resolve()) if prior is not None else None)
-    click.echo(f"bench run: {len(summary.done)} done, {len(summary.skipped)} already done, "
-               f"{len(summary.failed)} failed -> {out_dir}")
-    for name, err in summary.failed.items():
-        click.echo(f"  failed {name}: {err}", err=True)
-    if summary.failed:
-        raise SystemExit(1)
+                            progress=not quiet, scheduler=scheduler, model_name=model_name)
+    echo_run_summary("bench run", summary, out_dir)
 
 
 @command.command("report")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import click
 
@@ -152,21 +153,38 @@ def fail(message: str) -> None:
     raise InputError(message)
 
 
-def load_prior(model, method: str, note: str):
+def load_prior(model, needed_by: str):
     """The prior of ``--model MODEL`` (a model folder, a training run or the authors' run), or the
     bundled one when MODEL is None, on the device Mitsuba renders on so that decoded maps reach the
-    renderer without copies. ``note`` is printed to stderr when the bundled prior is taken."""
+    renderer without copies.
+
+    ``needed_by`` names what asked for it (``"--method prior"``): in the note printed to stderr when
+    the bundled prior is taken, and in the error when there is no prior at all.
+    Returns ``(model, path)``: the ``PanoVAE`` and the folder it was read from (for the records)."""
     if model is None:
         from roomlight.demo import bundled_prior_path
 
         model = bundled_prior_path()
         if model is None:
-            fail(f"--method {method} needs --model (a trained prior); this installation has no bundled prior")
-        click.echo(note.format(model=model), err=True)
+            fail(f"{needed_by} needs --model (a trained prior); this installation has no bundled prior")
+        click.echo(f"note: {needed_by} without --model: using the bundled prior ({model}), a small CPU-trained one; "
+                   "pass --model RUN for your own", err=True)
     from roomlight.model.runs import load_run_model
     from roomlight.render.variant import torch_device
 
-    return load_run_model(model, device=torch_device())
+    return load_run_model(model, device=torch_device()), str(Path(model).resolve())
+
+
+def echo_run_summary(command: str, summary, out_dir) -> None:
+    """Print a benchmark run's outcome (``summary.done``, ``.skipped``, ``.failed``: name -> error)
+    and exit with status 1 when a case failed, so scripts notice; the failed cases are retried on
+    the next run."""
+    click.echo(f"{command}: {len(summary.done)} done, {len(summary.skipped)} already done, "
+               f"{len(summary.failed)} failed -> {out_dir}")
+    for name, err in summary.failed.items():
+        click.echo(f"  failed {name}: {err}", err=True)
+    if summary.failed:
+        raise SystemExit(1)
 
 
 def echo_fixes(fixes) -> None:

@@ -55,8 +55,7 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     cfg = fit_config(preset, **{**overrides, **parse_sets(sets)})
     prior = None
     if needs_prior(method):
-        prior = load_prior(model, method, f"note: --method {method} without --model: using the bundled prior "
-                           "({model}), a small CPU-trained one; pass --model RUN for your own")
+        prior, _ = load_prior(model, f"--method {method}")
     result = fit_scene(spec, method, cfg, out_dir=out_dir, model=prior, progress=not quiet)
     click.echo(f"{method}: best iteration {result.best_iteration} (fixed-seed loss {result.best_loss:.4g}) "
                f"in {result.seconds:.1f} s -> {out_dir}")

@@ -83,8 +83,7 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
         click.echo(f"note: {note}", err=True)
     prior = None
     if any(m.startswith("prior") for m in (method, *compare)):
-        prior = load_prior(model, method, "note: using the bundled prior ({model}), a small CPU-trained one; pass "
-                           "--model RUN for your own")
+        prior, _ = load_prior(model, f"--method {method}")
     click.echo(f"{case.files['image']}: {case.width}x{case.height}, {len(case.objects.ids)} object(s), "
                f"{case.depth_kind} depth from {case.files['depth']}", err=True)
     run_photo(case, method, cfg, out_dir, model=prior, compare=compare, progress=not quiet, resume=not restart,

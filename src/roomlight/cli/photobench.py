@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 
-from roomlight.cli.common import FINITE, RESOLUTION, default_of, parse_sets, sets_option
+from roomlight.cli.common import FINITE, RESOLUTION, default_of, echo_run_summary, load_prior, parse_sets, sets_option
 from roomlight.photobench.config import PhotoBenchConfig
 from roomlight.photobench.runner import DEFAULT_EVAL_SPP, DEFAULT_METHODS, KNOWN_METHODS
 
@@ -106,28 +104,12 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, qu
     bad = [m for m in method_list if m not in KNOWN_METHODS]
     if bad:
         raise click.UsageError(f"--methods: unknown method(s) {', '.join(bad)}; choose from {', '.join(KNOWN_METHODS)}")
-    prior = None
+    prior = model_name = None
     if any(m.startswith("prior") for m in method_list):
-        if model is None:
-            from roomlight.demo import bundled_prior_path
-
-            model = bundled_prior_path()
-            if model is None:
-                raise click.UsageError("the prior methods need --model (a trained prior); this installation has "
-                                       "no bundled prior")
-        from roomlight.model.runs import load_run_model
-        from roomlight.render.variant import torch_device
-
-        prior = load_run_model(model, device=torch_device())
+        prior, model_name = load_prior(model, f"--methods {','.join(m for m in method_list if m.startswith('prior'))}")
     summary = run_photo_benchmark(bench, out_dir, method_list, preset, prior, eval_spp, _shard(shard),
-                                  progress=not quiet, overrides=parse_sets(sets),
-                                  model_name=str(Path(model).resolve()) if prior is not None else None)
-    click.echo(f"run-photos: {len(summary.done)} done, {len(summary.skipped)} already done, "
-               f"{len(summary.failed)} failed -> {out_dir}")
-    for name, err in summary.failed.items():
-        click.echo(f"  failed {name}: {err}", err=True)
-    if summary.failed:
-        raise SystemExit(1)
+                                  progress=not quiet, overrides=parse_sets(sets), model_name=model_name)
+    echo_run_summary("run-photos", summary, out_dir)
 
 
 @click.command("report-photos")
