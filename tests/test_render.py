@@ -227,3 +227,29 @@ def test_bridge_gradients_match_finite_differences(mi):
         assert abs(fd - float(d2.grad[i, j])) <= 0.1 * abs(fd) + 1e-2, (i, j, fd, float(d2.grad[i, j]))
         checked += 1
     assert checked == 3 and float(flat.max()) > 0.1
+
+
+def test_mitsuba_mesh_holds_the_arrays_it_is_given(mi):
+    """A 2 m x 1 m emissive quad built from arrays: its area, normals and texture coordinates are
+    the given ones, and a camera looking at it sees its radiance (Mitsuba's own definitions)."""
+    from roomlight.render.mesh import mitsuba_mesh
+
+    v = np.array([[-1, -0.5, -3], [1, -0.5, -3], [1, 0.5, -3], [-1, 0.5, -3]], np.float64)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    n = np.tile([0.0, 0.0, 1.0], (4, 1))
+    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float64)
+    emitter = mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": [2.0, 1.0, 0.5]}})
+    black = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
+    quad = mitsuba_mesh("quad", v, f, black, normals=n, uvs=uv, emitter=emitter)
+    assert float(np.array(quad.surface_area()).ravel()[0]) == pytest.approx(2.0, rel=1e-6)
+    params = mi.traverse(quad)
+    assert np.allclose(np.array(params["vertex_normals"]).reshape(-1, 3), n)
+    assert np.allclose(np.array(params["vertex_texcoords"]).reshape(-1, 2), uv)
+    assert np.array_equal(np.array(params["faces"]).reshape(-1, 3), f)
+    plain = mitsuba_mesh("plain", v, f, black)  # no normals, no uvs: flat shading, no texture coordinates
+    assert not plain.has_vertex_normals() and not plain.has_vertex_texcoords()
+    sensor = perspective_sensor((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), (0.0, 1.0, 0.0), 10.0, 8, 8)
+    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path", "max_depth": 2}, "sensor": sensor,
+                          "quad": quad})
+    img = np.array(mi.render(scene, spp=4))[..., :3]
+    assert np.allclose(img, [2.0, 1.0, 0.5], atol=1e-4)
