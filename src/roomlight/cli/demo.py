@@ -35,6 +35,7 @@ def command(out_dir, height, res, iterations, spp, gt_spp, material, seed):
     """
     from roomlight.demo import run_demo
 
-    s = run_demo(DemoConfig(Path(out_dir), height, res, iterations, spp, gt_spp, material, seed))
+    s = run_demo(DemoConfig(out=Path(out_dir), height=height, res=res, iterations=iterations, spp=spp, gt_spp=gt_spp,
+                            material=material, seed=seed))
     click.echo(f"demo finished in {s['seconds']} s ({s['variant']}); open {Path(out_dir) / 'report' / 'index.html'} "
                f"and {Path(out_dir) / 'parallax' / 'comparison.png'}")
