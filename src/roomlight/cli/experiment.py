@@ -88,7 +88,7 @@ def capacity(out_dir, rooms, seed, pano_height, pano_spp, image_size, spp, mater
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Study folder (data, six training runs, benchmark, tables); rerunning continues it.")
 @click.option("--preset", "study", type=click.Choice(["cpu", "paper", "tiny"]), default="cpu", show_default=True,
-              help="Size of the study. cpu: lite network, 1500 steps a row (3.5-4 h on 2 cores); paper: the "
+              help="Size of the study. cpu: lite network, 1000 steps a row (about 2 h on 2 cores); paper: the "
                    "paper's network and schedule (a GPU); tiny: a smoke test of about a minute. The network "
                    "itself is --set preset=NAME (a roomlight train --config).")
 @click.option("--data", "data_dir", type=click.Path(exists=True, file_okay=False), default=None,

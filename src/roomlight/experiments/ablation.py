@@ -47,7 +47,7 @@ class AblationConfig(StrictConfig):
     """Settings of the ablation study (one equal training budget for every row)."""
 
     preset: str = "lite"              #: training + model preset of every row (roomlight train --config)
-    steps: int = 1500                 #: optimiser steps per row (0: the preset's own epochs)
+    steps: int = 1000                 #: optimiser steps per row (0: the preset's own epochs)
     lr: float = 1e-3                  #: peak learning rate (the bundled prior's CPU recipe)
     warmup_steps: int = 100           #: learning-rate warm-up steps
     batch_size: int = 0               #: batch size (0: the preset's)
@@ -81,7 +81,7 @@ class AblationConfig(StrictConfig):
                 raise RoomlightError(f"ablate: {name} must be >= 0, got {getattr(self, name)}")
 
 
-#: ``cpu``: the whole study in about three and a half hours on a 2-core CPU (lite network,
+#: ``cpu``: the whole study in about two hours on a 2-core CPU (lite network,
 #: 64 x 128); ``paper``: the paper's network and schedule (a GPU); ``tiny``: a smoke test.
 ABLATION_PRESETS: dict[str, AblationConfig] = {
     "cpu": AblationConfig(),
