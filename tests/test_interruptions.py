@@ -165,7 +165,9 @@ def interrupt_and_rerun(args, out: Path, ready, sig: int, seed: int, max_delay: 
     roomlight(*args)
 
 
-SYNTH = ["synth", "--n", 3, "--res", "16x32", "--spp", 4, "--no-denoise", "--workers", 1, "--no-summary"]
+# Eight rooms and a delay under 0.3 s: with three rooms and up to 1 s, a quiet machine (0.2 s a room)
+# finished the last two within the delay, and the signal reached a process that had done its work.
+SYNTH = ["synth", "--n", 8, "--res", "16x32", "--spp", 4, "--no-denoise", "--workers", 1, "--no-summary"]
 
 
 @pytest.fixture(scope="module")
@@ -179,7 +181,8 @@ def synth_straight(tmp_path_factory):
 @ALL_SIGNALS
 def test_synth_interrupted_then_rerun_renders_every_room_once_and_identically(synth_straight, tmp_path, sig):
     out = tmp_path / "rooms"
-    interrupt_and_rerun([*SYNTH, "--out", out], out, lambda: any(out.glob("**/*.exr")), sig, seed=int(sig))
+    interrupt_and_rerun([*SYNTH, "--out", out], out, lambda: any(out.glob("**/*.exr")), sig, seed=int(sig),
+                        max_delay=0.3)
     assert_same_exrs(exr_pixels(out, "**/*.exr"), synth_straight)
     assert not list(out.glob("**/*.partial.exr")), "a partial file was left behind"
 
