@@ -44,7 +44,7 @@ from roomlight.bench.metrics import score_view
 from roomlight.bench.rendering import render_view
 
 __all__ = ["Case", "RunSummary", "EVAL_SEEDS", "parse_shard", "list_cases", "run_case", "run_benchmark",
-           "known_methods", "oracle_fit", "record_failure", "write_json", "ORACLE", "RESULT", "RUN_FILE"]
+           "known_methods", "oracle_fit", "check_run_file", "record_failure", "write_json", "ORACLE", "RESULT", "RUN_FILE"]
 
 #: Samples per pixel of the scoring re-renders (the paper uses 4096).
 DEFAULT_EVAL_SPP = 256
@@ -248,7 +248,9 @@ def known_methods() -> tuple[str, ...]:
     return tuple(METHODS)
 
 
-def _check_run_file(out: Path, settings: dict) -> None:
+def check_run_file(out: Path, settings: dict, keys) -> None:
+    """Refuse a results folder whose ``run.json`` was written with other values of ``keys`` (the
+    settings that change what a case computes), then record ``settings`` there."""
     f = out / RUN_FILE
     if f.is_file():
         try:
@@ -256,7 +258,7 @@ def _check_run_file(out: Path, settings: dict) -> None:
         except ValueError:
             old = None
         if isinstance(old, dict):
-            for key in ("fit_config", "eval_spp", "max_depth"):
+            for key in keys:
                 if key in old and old[key] != settings[key]:
                     raise BenchError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
                                      f"now {settings[key]!r}); use another --out, or delete it to start over")
@@ -313,7 +315,7 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
                 "eval_spp": eval_spp, "max_depth": max_depth}
     if model_name is not None:
         settings["model"] = str(model_name)
-    _check_run_file(out, settings)
+    check_run_file(out, settings, ("fit_config", "eval_spp", "max_depth"))
     cases = list_cases(bench, methods, shard)
     summary = RunSummary()
     todo = []

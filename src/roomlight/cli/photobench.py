@@ -104,9 +104,10 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, qu
     bad = [m for m in method_list if m not in KNOWN_METHODS]
     if bad:
         raise click.UsageError(f"--methods: unknown method(s) {', '.join(bad)}; choose from {', '.join(KNOWN_METHODS)}")
+    with_prior = [m for m in method_list if m.startswith("prior")]
     prior = model_name = None
-    if any(m.startswith("prior") for m in method_list):
-        prior, model_name = load_prior(model, f"--methods {','.join(m for m in method_list if m.startswith('prior'))}")
+    if with_prior:
+        prior, model_name = load_prior(model, f"--methods {','.join(with_prior)}")
     summary = run_photo_benchmark(bench, out_dir, method_list, preset, prior, eval_spp, _shard(shard),
                                   progress=not quiet, overrides=parse_sets(sets), model_name=model_name)
     echo_run_summary("run-photos", summary, out_dir)

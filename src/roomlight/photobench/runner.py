@@ -25,14 +25,13 @@ Runs resume (a case with a ``result.json`` is skipped); ``shard=(i, n)`` takes c
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.runner import RunSummary, record_failure, write_json
+from roomlight.bench.runner import RunSummary, check_run_file, record_failure, write_json
 from roomlight.errors import RoomlightError
 from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.photobench.builder import read_photo_manifest
@@ -127,21 +126,6 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
     return record
 
 
-def _check_run_file(out: Path, settings: dict) -> None:
-    f = out / RUN_FILE
-    if f.is_file():
-        try:
-            old = json.loads(f.read_text())
-        except ValueError:
-            old = None
-        if isinstance(old, dict):
-            for key in ("preset", "overrides", "eval_spp", "max_depth"):
-                if key in old and old[key] != settings[key]:
-                    raise RoomlightError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
-                                         f"now {settings[key]!r}); use another --out, or delete it to start over")
-    write_json(f, settings)
-
-
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
                         eval_spp: int = DEFAULT_EVAL_SPP, shard=(0, 1), progress: bool = True, fit=None,
                         model_name: str | None = None, overrides: dict | None = None) -> RunSummary:
@@ -169,7 +153,7 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
                 "overrides": dict(overrides or {}), "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH}
     if model_name is not None:
         settings["model"] = str(model_name)
-    _check_run_file(out, settings)
+    check_run_file(out, settings, ("preset", "overrides", "eval_spp", "max_depth"))
     summary = RunSummary()
     todo = []
     for c in cases:
