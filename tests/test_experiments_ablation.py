@@ -94,7 +94,7 @@ def test_config_files_without_the_switches_load_with_both_on(tmp_path):
     path.write_text(json.dumps(meta))
     model = PanoVAE.from_pretrained(tmp_path / "old")
     assert model.config.adagn and model.config.latitude
-    bundled = PanoVAE.from_pretrained(bundled_prior_path())  # its config.json predates the switches
+    bundled = PanoVAE.from_pretrained(bundled_prior_path())  # the paper's full model
     assert bundled.config.adagn and bundled.config.latitude
 
 
