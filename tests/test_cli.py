@@ -145,5 +145,14 @@ def test_fit_command_outputs_and_whole_frame_flag(tmp_path):
         assert r.exit_code == 0, r.output
         res = json.loads((out / "result.json").read_text())
         assert res["config"]["crop_to_mask"] is cropped
+        # The light's brightness, recomputed from the written panorama with Rec. 709 weights.
+        from roomlight.io import read_panorama
+
+        rad = read_panorama(out / "panorama.exr").radiance.astype(np.float64)
+        lum = rad @ np.array([0.2126, 0.7152, 0.0722])
+        assert res["light"]["peak_luminance"] == pytest.approx(lum.max(), rel=1e-5)
+        lower_median = np.sort(lum, axis=None)[(lum.size - 1) // 2]  # torch's median of an even count
+        assert res["light"]["median_luminance"] == pytest.approx(lower_median, rel=1e-5)
+        assert res["light"]["extreme"] is False
         for name in ("panorama.exr", "loss.png", "preview.png", "history.jsonl"):
             assert (out / name).is_file()

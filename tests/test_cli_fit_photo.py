@@ -155,6 +155,8 @@ def test_fit_photo_writes_every_output(tmp_path):
     assert res["settings"]["iterations"] == 2 and res["camera"]["depth_kind"] == "z"
     pano = read_panorama(out / "panorama.exr")
     assert pano.depth is not None and pano.radiance.shape[:2] == pano.depth.shape
+    lum = pano.radiance.astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722])  # Rec. 709
+    assert res["light"]["peak_luminance"] == pytest.approx(lum.max(), rel=1e-5)
     probes = json.loads((out / "probes.json").read_text())
     assert len(probes["sites"]) == 2 and probes["rows"] == ["prior", "direct-envmap"]
     assert "prior: best iteration" in r.output and "probes: 2 positions under 2 light(s)" in r.output

@@ -234,3 +234,22 @@ def test_nonfinite_gradients_are_skipped_not_applied(tiny):
     assert res.nonfinite_steps == 3
     assert torch.equal(light.log_radiance.detach(), before)
     assert all(x.get("skipped_nonfinite") for x in res.history if "total" in x)
+
+
+def test_a_recovered_light_with_one_runaway_texel_is_flagged():
+    """A plausible room passes; the same room with one texel at 1e6 (as a mirror fit once grew) is flagged."""
+    from roomlight.inverse.outputs import EXTREME_CONTRAST, extreme_light_note, light_summary
+
+    gen = torch.Generator().manual_seed(0)
+    room = 0.5 + torch.rand(16, 32, 3, generator=gen)  # luminance 0.5-1.5
+    room[2, 5] = 300.0                                  # a lamp: a few hundred times the median
+    ok = light_summary(room)
+    lum = room.double() @ torch.tensor([0.2126, 0.7152, 0.0722], dtype=torch.float64)
+    assert ok["peak_luminance"] == pytest.approx(300.0)
+    assert ok["median_luminance"] == pytest.approx(float(lum.flatten().sort().values[(lum.numel() - 1) // 2]))
+    assert not ok["extreme"] and extreme_light_note(ok) is None
+    runaway = room.clone()
+    runaway[8, 20] = 1e6
+    bad = light_summary(runaway)
+    assert bad["peak_contrast"] > EXTREME_CONTRAST and bad["extreme"]
+    assert "preview.png" in extreme_light_note(bad)

@@ -49,6 +49,7 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     result.json.
     """
     from roomlight.inverse import fit_config, fit_scene
+    from roomlight.inverse.outputs import extreme_light_note, light_summary
     from roomlight.scene import load_scene
 
     spec = load_scene(scene)
@@ -61,3 +62,6 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
                f"in {result.seconds:.1f} s -> {out_dir}")
     if result.nonfinite_steps:
         click.echo(f"note: {result.nonfinite_steps} step(s) had a non-finite loss or gradient and were skipped", err=True)
+    note = extreme_light_note(light_summary(result.radiance))
+    if note:
+        click.echo(note, err=True)

@@ -8,7 +8,42 @@ from pathlib import Path
 import numpy as np
 import torch
 
-__all__ = ["write_fit_outputs", "plot_history"]
+__all__ = ["write_fit_outputs", "plot_history", "light_summary", "extreme_light_note", "EXTREME_CONTRAST"]
+
+#: Brightest texel over median luminance above which a recovered light is flagged. The 2400
+#: procedural training rooms of the bundled prior reach at most 14,791x their log-average
+#: luminance (about their median), and a fit sees a texel only through the few pixels that
+#: reflect it: the image loss censors renders at the target's clipping level, so a texel seen
+#: only in saturated pixels can grow without bound (a mirror fit grew one to 172,788 in a room
+#: whose brightest value is 71). A real sun can exceed this too, hence a note, not an error.
+EXTREME_CONTRAST = 1e5
+
+
+def light_summary(radiance: torch.Tensor) -> dict:
+    """Brightness of a recovered light, for ``result.json`` and the CLI's note.
+
+    Args:
+        radiance: (H, W, 3) linear radiance (exposure applied).
+    Returns:
+        ``peak_luminance`` and ``median_luminance`` (Rec. 709), ``peak_contrast`` (their ratio,
+        the median floored at 1e-12) and ``extreme`` (contrast above :data:`EXTREME_CONTRAST`).
+    """
+    from roomlight.color import luminance_torch
+
+    lum = luminance_torch(radiance.detach().double().permute(2, 0, 1)).flatten()
+    peak, median = float(lum.max()), float(lum.median())
+    contrast = peak / max(median, 1e-12)
+    return {"peak_luminance": peak, "median_luminance": median, "peak_contrast": contrast,
+            "extreme": contrast > EXTREME_CONTRAST}
+
+
+def extreme_light_note(summary: dict) -> str | None:
+    """One line for the user when :func:`light_summary` flags the light, else None."""
+    if not summary["extreme"]:
+        return None
+    return (f"note: the recovered light's brightest texel is {summary['peak_contrast']:.3g}x its median luminance; "
+            "a texel that bright is usually one the view did not constrain (its reflection fell on saturated "
+            "pixels): look at preview.png and panorama.exr before rendering with it")
 
 
 def plot_history(history: list[dict], path: Path, title: str = "") -> None:
@@ -64,7 +99,7 @@ def write_fit_outputs(out: Path, result, fitter, target: torch.Tensor, mask: tor
     save_png(paths["preview"], strip)
     summary = {"method": result.method, "emitter_kind": result.emitter_kind, "best_iteration": result.best_iteration,
                "best_fixed_seed_loss": result.best_loss, "seconds": round(result.seconds, 3),
-               "nonfinite_steps": result.nonfinite_steps, "config": result.config,
+               "nonfinite_steps": result.nonfinite_steps, "light": light_summary(rad), "config": result.config,
                "files": {k: str(v.relative_to(out)) for k, v in paths.items()}}
     paths["result"] = out / "result.json"
     paths["result"].write_text(json.dumps(summary, indent=2))

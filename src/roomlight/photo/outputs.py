@@ -86,7 +86,7 @@ def _write_objects(path: Path, fit) -> None:
 def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[str, Path]:
     """Write one fit's files (module docstring) into ``out``; returns them by role."""
     from roomlight.emitter.export import export_emitter
-    from roomlight.inverse.outputs import plot_history
+    from roomlight.inverse.outputs import light_summary, plot_history
     from roomlight.io import save_png, write_exr, write_panorama
 
     t0 = time.perf_counter()
@@ -133,6 +133,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "format": RESULT_FORMAT, "version": 1, "method": fit.method, "emitter_kind": kind,
         "objective": {k: float(v) for k, v in fit.objective.items()},
         "best_iteration": r.best_iteration, "best_fixed_seed_loss": r.best_loss, "nonfinite_steps": r.nonfinite_steps,
+        "light": light_summary(r.radiance),
         "materials": materials,
         "objects": objects,
         "camera": {"intrinsics_input": case.intrinsics.to_dict(), "input_size": [case.height, case.width],
