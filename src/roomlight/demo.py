@@ -41,7 +41,7 @@ class DemoConfig(StrictConfig):
     parallax_spp: int = 512
     material: str = "matte"   #: benchmark material (diffuse, matte or mirror)
     #: Room seed. 400001 is outside the seeds the bundled prior was trained and validated on
-    #: (0-1499), so the demo shows the prior on a room it has never seen: a blue room lit by two
+    #: (0-2399), so the demo shows the prior on a room it has never seen: a blue room lit by two
     #: windows on one side.
     seed: int = 400001
 
