@@ -253,3 +253,21 @@ def test_a_recovered_light_with_one_runaway_texel_is_flagged():
     bad = light_summary(runaway)
     assert bad["peak_contrast"] > EXTREME_CONTRAST and bad["extreme"]
     assert "preview.png" in extreme_light_note(bad)
+
+
+def test_the_light_note_is_read_from_the_recorded_result(tmp_path):
+    """The command line's note follows the ``light`` written in result.json, not a second measurement."""
+    import json
+
+    from roomlight.inverse.outputs import light_summary, recorded_light_note
+
+    room = torch.full((8, 16, 3), 0.5)
+    runaway = room.clone()
+    runaway[3, 4] = 1e7  # 2e7x the median
+    for radiance, flagged in ((room, False), (runaway, True)):
+        path = tmp_path / f"{flagged}.json"
+        path.write_text(json.dumps({"method": "prior", "light": light_summary(radiance)}))
+        note = recorded_light_note(path)
+        assert (note is not None) is flagged
+        if flagged:
+            assert "2e+07x" in note

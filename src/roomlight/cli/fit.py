@@ -48,8 +48,10 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     history.jsonl (one line per iteration), loss.png, preview.png (target | render | error) and
     result.json.
     """
+    from pathlib import Path
+
     from roomlight.inverse import fit_config, fit_scene
-    from roomlight.inverse.outputs import extreme_light_note, light_summary
+    from roomlight.inverse.outputs import recorded_light_note
     from roomlight.scene import load_scene
 
     spec = load_scene(scene)
@@ -62,6 +64,6 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
                f"in {result.seconds:.1f} s -> {out_dir}")
     if result.nonfinite_steps:
         click.echo(f"note: {result.nonfinite_steps} step(s) had a non-finite loss or gradient and were skipped", err=True)
-    note = extreme_light_note(light_summary(result.radiance))
+    note = recorded_light_note(Path(out_dir) / "result.json")
     if note:
         click.echo(note, err=True)

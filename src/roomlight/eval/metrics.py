@@ -23,7 +23,7 @@ from roomlight.color import MIDDLE_GREY, log_average_torch, luminance_torch, to_
 from roomlight.errors import ShapeError
 
 __all__ = ["LDR_KEY", "log_average_luminance", "to_ldr", "psnr", "psnr_hdr", "ssim", "abs_rel",
-           "peak_error_stops", "peak_contrast", "gaussian_window"]
+           "peak_error_stops", "peak_and_median_luminance", "peak_contrast", "gaussian_window"]
 
 #: Log-average luminance the LDR mapping exposes to ("middle grey").
 LDR_KEY = MIDDLE_GREY
@@ -106,14 +106,21 @@ def peak_error_stops(pred: torch.Tensor, target: torch.Tensor, floor: float = 1e
     return torch.log2(peak_p / peak_t).abs()
 
 
+def peak_and_median_luminance(radiance: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """(B,), (B,) brightest and median Rec. 709 luminance (float64) of (B, 3, H, W) linear panoramas."""
+    lum = luminance_torch(radiance.double()).flatten(1)
+    return lum.amax(1), lum.median(1).values
+
+
 def peak_contrast(radiance: torch.Tensor) -> torch.Tensor:
     """(B,) brightest pixel's luminance over the median luminance, per (B, 3, H, W) panorama.
 
+    The median is floored at 1e-12 (a black panorama gives a huge ratio, not a division by zero).
     Needs no reference, so it also describes samples: six procedural 64 x 128 rooms measured
     26-162x; a prior whose decoded rooms sit near 2x shows no light sources.
     """
-    lum = luminance_torch(radiance.double()).flatten(1)
-    return lum.amax(1) / lum.median(1).values.clamp_min(1e-12)
+    peak, median = peak_and_median_luminance(radiance)
+    return peak / median.clamp_min(1e-12)
 
 
 def abs_rel(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:

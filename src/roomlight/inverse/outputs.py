@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-__all__ = ["write_fit_outputs", "plot_history", "light_summary", "extreme_light_note", "EXTREME_CONTRAST"]
+__all__ = ["write_fit_outputs", "plot_history", "light_summary", "extreme_light_note", "recorded_light_note", "EXTREME_CONTRAST"]
 
 #: Brightest texel over median luminance above which a recovered light is flagged. The 2400
 #: procedural training rooms of the bundled prior reach at most 14,791x their log-average
@@ -20,18 +20,18 @@ EXTREME_CONTRAST = 1e5
 
 
 def light_summary(radiance: torch.Tensor) -> dict:
-    """Brightness of a recovered light, for ``result.json`` and the CLI's note.
+    """Brightness of a recovered light, recorded as ``light`` in ``result.json``.
 
     Args:
         radiance: (H, W, 3) linear radiance (exposure applied).
     Returns:
         ``peak_luminance`` and ``median_luminance`` (Rec. 709), ``peak_contrast`` (their ratio,
-        the median floored at 1e-12) and ``extreme`` (contrast above :data:`EXTREME_CONTRAST`).
+        as :func:`roomlight.eval.metrics.peak_contrast`) and ``extreme`` (contrast above
+        :data:`EXTREME_CONTRAST`).
     """
-    from roomlight.color import luminance_torch
+    from roomlight.eval.metrics import peak_and_median_luminance
 
-    lum = luminance_torch(radiance.detach().double().permute(2, 0, 1)).flatten()
-    peak, median = float(lum.max()), float(lum.median())
+    peak, median = (float(v[0]) for v in peak_and_median_luminance(radiance.detach().permute(2, 0, 1)[None]))
     contrast = peak / max(median, 1e-12)
     return {"peak_luminance": peak, "median_luminance": median, "peak_contrast": contrast,
             "extreme": contrast > EXTREME_CONTRAST}
@@ -44,6 +44,15 @@ def extreme_light_note(summary: dict) -> str | None:
     return (f"note: the recovered light's brightest texel is {summary['peak_contrast']:.3g}x its median luminance; "
             "a texel that bright is usually one the view did not constrain (its reflection fell on saturated "
             "pixels): look at preview.png and panorama.exr before rendering with it")
+
+
+def recorded_light_note(result_json: Path) -> str | None:
+    """:func:`extreme_light_note` for the ``light`` a fit recorded in its ``result.json``.
+
+    The command line reads the summary back rather than measuring the light again, so the note
+    and the file cannot disagree.
+    """
+    return extreme_light_note(json.loads(Path(result_json).read_text())["light"])
 
 
 def plot_history(history: list[dict], path: Path, title: str = "") -> None:

@@ -37,7 +37,7 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
         model: the prior (a PanoVAE) when a prior method is among them.
         say: called with one line per finished step (e.g. ``click.echo``).
     """
-    from roomlight.inverse.outputs import extreme_light_note, light_summary
+    from roomlight.inverse.outputs import recorded_light_note
     from roomlight.photo.outputs import atomic_write, light_view, write_fit_files
     from roomlight.photo.probes import LightView, choose_probe_sites, probe_figure, render_probes
 
@@ -48,11 +48,11 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
     for m in methods:
         folder = out if m == method else out / "compare" / m
         fit = fit_photo(case, m, config, model=model, out_dir=folder, progress=progress, resume=resume)
-        write_fit_files(folder, fit, case, config, extra={"compared_with": [x for x in methods if x != m]})
+        files = write_fit_files(folder, fit, case, config, extra={"compared_with": [x for x in methods if x != m]})
         (folder / STATE_FILE).unlink(missing_ok=True)  # finished: the outputs are the result
         say(f"{m}: best iteration {fit.result.best_iteration} (fixed-seed loss {fit.result.best_loss:.4g}) "
             f"in {fit.timings['fit']:.1f} s -> {folder}")
-        note = extreme_light_note(light_summary(fit.result.radiance))
+        note = recorded_light_note(files["result"])
         if note:
             say(f"{m}: {note}")
         fits.append(fit)
