@@ -1,6 +1,7 @@
 """Illumination fitting: objective, repulsion, smoothness, and end-to-end fits on a tiny scene."""
 
 import math
+from pathlib import Path
 
 import pytest
 import torch
@@ -118,6 +119,46 @@ def test_envmap_and_area_light_share_the_image_objective(tiny):
     assert torch.equal(a.target, e.target) and torch.equal(a.mask, e.mask)
     for k in ("l2", "log", "img"):
         assert float(ta[k]) == float(te[k])
+
+
+@pytest.mark.mitsuba
+def test_repulsion_keeps_every_object_of_the_scene_inside_the_emitter(tiny):
+    """An object seen only by another view (a benchmark's evaluation probe) is among the repulsion
+    points by default, so an emitter that closes in between it and the capture point is penalised."""
+    import json
+
+    import numpy as np
+
+    from roomlight.inverse import repulsion_penalty
+    from roomlight.scene.description import parse_scene
+
+    scene, _, _ = tiny
+    root = Path(scene.views["input"].image).parent
+    data = json.loads((root / "scene.json").read_text())
+    centre, radius = np.array([0.3, 0.6, -4.0]), 0.5  # 4.05 m away, behind the input objects
+    data["objects"].append({"id": "probe", "shape": "sphere", "translate": centre.tolist(), "scale": radius,
+                            "material": "diffuse"})
+    data["views"]["eval"] = {"camera": data["views"]["input"]["camera"], "objects": ["probe"]}
+    with_probe = parse_scene(data, root)
+    cfg = FitConfig(iterations=1, spp=4, repulsion_points=256)
+    light = make_light("direct-al", with_probe, cfg)
+    pts_scene = build_fitter(with_probe, light, cfg).points
+    pts_view = build_fitter(with_probe, light, cfg.override(repulsion_objects="view")).points
+    assert pts_scene.shape == (3 * 256, 3) and pts_view.shape == (2 * 256, 3)
+    assert torch.equal(pts_scene[:512], pts_view)  # the input objects' points are the same either way
+    on_sphere = np.linalg.norm(pts_scene[512:].double().numpy() - centre, axis=1)
+    assert np.allclose(on_sphere, radius, rtol=0.02)  # the probe's surface (a tessellated sphere)
+    # A constant 3 m room: the input objects are inside, the probe (3.55-4.55 m away) outside. The
+    # penalty is the mean of max(m - (3 - |q|), 0), computed here from the points' distances.
+    depth = torch.full((16, 32), 3.0)
+    for pts in (pts_scene, pts_view):
+        dist = pts.double().norm(dim=1).numpy()
+        expected = np.maximum(cfg.margin - (3.0 - dist), 0).mean()
+        assert float(repulsion_penalty(depth, pts, cfg.margin)) == pytest.approx(expected, rel=1e-3, abs=1e-6)
+    assert float(repulsion_penalty(depth, pts_view, cfg.margin)) == 0.0
+    assert float(repulsion_penalty(depth, pts_scene, cfg.margin)) > 0.3
+    with pytest.raises(RoomlightError, match="repulsion_objects"):
+        build_fitter(with_probe, light, cfg.override(repulsion_objects="nearby"))
 
 
 @pytest.mark.mitsuba

@@ -28,6 +28,10 @@ class FitConfig(StrictConfig):
     lambda_rep: float = 0.1               #: weight of the repulsion term
     margin: float = 0.05                  #: repulsion margin m in metres (scene units)
     repulsion_points: int = 512           #: surface points per object for the repulsion term
+    #: whose surface points the repulsion keeps inside the emitter: 'scene' (every object of the
+    #: scene description, in any view: all the geometry the light will shine on) or 'view'
+    #: (only the objects of the fitted view)
+    repulsion_objects: str = "scene"
     smooth_radiance: float = 5e-5         #: smoothness weight on log radiance (direct methods)
     smooth_depth: float = 1e-4            #: smoothness weight on log depth (direct-al)
     init_exposure: float = 0.18           #: e^s at the start (prior) / initial radiance (direct)

@@ -20,8 +20,8 @@ from roomlight.inverse.config import FitConfig
 from roomlight.inverse.fitter import FitResult, Fitter, mask_window
 from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
 
-__all__ = ["METHODS", "PRIOR_METHODS", "needs_prior", "make_light", "enclosing_sphere_radius", "build_fitter",
-           "fit_scene"]
+__all__ = ["METHODS", "PRIOR_METHODS", "needs_prior", "make_light", "enclosing_sphere_radius", "repulsion_object_ids",
+           "build_fitter", "fit_scene"]
 
 #: Every method, in the table's order, and whether it fits the latent of a trained prior
 #: (and so needs ``--model``) rather than free per-pixel maps.
@@ -59,6 +59,23 @@ def make_light(method: str, scene, config: FitConfig, model=None) -> LightModel:
                        smooth_radiance=config.smooth_radiance, smooth_depth=config.smooth_depth)
 
 
+def repulsion_object_ids(scene, view, config: FitConfig) -> list[str]:
+    """The objects whose surface points the repulsion term keeps inside the emitter.
+
+    ``'scene'`` (default): every object of the scene, also those the fitted view does not show.
+    The light is recovered to shine on all of them, and an emitter that closes in behind an
+    object of another view lights it from the back faces of its mesh, which emit nothing (a
+    benchmark's evaluation probe outside the fitted room goes dark). The sphere proxy and
+    ``direct-al``'s starting sphere enclose every object for the same reason.
+    ``'view'``: only the fitted view's objects.
+    """
+    if config.repulsion_objects == "scene":
+        return list(scene.objects)
+    if config.repulsion_objects == "view":
+        return list(view.objects)
+    raise RoomlightError(f"repulsion_objects must be 'scene' or 'view', not {config.repulsion_objects!r}")
+
+
 def build_fitter(scene, light: LightModel, config: FitConfig) -> Fitter:
     """A :class:`Fitter` of ``light`` against the scene's view ``config.view``."""
     from roomlight.render.scene import EmitterScene
@@ -69,7 +86,10 @@ def build_fitter(scene, light: LightModel, config: FitConfig) -> Fitter:
     sensor = view.camera.sensor()
     escene = EmitterScene(light.kind, light.resolution, objects=view_objects(scene, view), sensor=sensor,
                           integrator={"type": "prb", "max_depth": int(config.max_depth)})
-    points = scene_points(scene, view.objects, config.repulsion_points, seed=config.seed) if light.has_depth else None
+    points = None
+    if light.has_depth:
+        points = scene_points(scene, repulsion_object_ids(scene, view, config), config.repulsion_points,
+                              seed=config.seed)
     window = mask_window(mask) if config.crop_to_mask else None
     return Fitter(light, escene, target, mask, points, config, sensor_dict=sensor, window=window)
 
