@@ -63,10 +63,10 @@ def repulsion_object_ids(scene, view, config: FitConfig) -> list[str]:
     """The objects whose surface points the repulsion term keeps inside the emitter.
 
     ``'scene'`` (default): every object of the scene, also those the fitted view does not show.
-    The light is recovered to shine on all of them, and an emitter that closes in behind an
-    object of another view lights it from the back faces of its mesh, which emit nothing (a
-    benchmark's evaluation probe outside the fitted room goes dark). The sphere proxy and
-    ``direct-al``'s starting sphere enclose every object for the same reason.
+    The light is recovered to shine on all of them, and an object left outside the fitted mesh
+    is hidden behind it from the capture point and sees only its back faces, which emit nothing
+    (a benchmark's evaluation probe outside the fitted room vanishes behind the emitter). The
+    sphere proxy and ``direct-al``'s starting sphere enclose every object for the same reason.
     ``'view'``: only the fitted view's objects.
     """
     if config.repulsion_objects == "scene":
