@@ -46,6 +46,15 @@ class FitConfig(StrictConfig):
     view: str = "input"                   #: the scene view to fit
     image: str = "ldr"                    #: target: 'ldr' (8-bit recording) or 'hdr' (linear EXR)
 
+    def __post_init__(self) -> None:
+        if self.repulsion_objects not in REPULSION_OBJECTS:
+            raise RoomlightError(f"fit setting repulsion_objects must be one of {', '.join(REPULSION_OBJECTS)}, "
+                                 f"not {self.repulsion_objects!r}")
+
+
+#: Values of ``FitConfig.repulsion_objects``.
+REPULSION_OBJECTS = ("scene", "view")
+
 
 #: ``paper`` = the paper's settings; ``fast`` = a CPU-friendly setting for benchmarks and demos.
 FIT_PRESETS: dict[str, FitConfig] = {

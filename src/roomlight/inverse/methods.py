@@ -69,11 +69,7 @@ def repulsion_object_ids(scene, view, config: FitConfig) -> list[str]:
     sphere proxy and ``direct-al``'s starting sphere enclose every object for the same reason.
     ``'view'``: only the fitted view's objects.
     """
-    if config.repulsion_objects == "scene":
-        return list(scene.objects)
-    if config.repulsion_objects == "view":
-        return list(view.objects)
-    raise RoomlightError(f"repulsion_objects must be 'scene' or 'view', not {config.repulsion_objects!r}")
+    return list(scene.objects) if config.repulsion_objects == "scene" else list(view.objects)
 
 
 def build_fitter(scene, light: LightModel, config: FitConfig) -> Fitter:
