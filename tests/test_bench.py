@@ -267,6 +267,8 @@ def test_runner_scores_cases_and_resumes(bench, results):
         for f in ("recovered.exr", "input.exr", "eval.exr"):
             assert (case / "x2" / f).is_file()
         assert (case / "broken" / "error.json").is_file() and not (case / "broken" / "result.json").exists()
+        # The true emitter encloses every object (the placement's rule); light at infinity records nothing.
+        assert oracle["outside"] == {"input": 0.0, "eval": 0.0} and x2["outside"] is None
     # Resume: finished cases are skipped, failed ones retried.
     again = []
     s2 = run_benchmark(bench[0], res, ["oracle", "x2", "broken"], eval_spp=16, progress=False, fit=_stub_fit(again))
@@ -274,6 +276,48 @@ def test_runner_scores_cases_and_resumes(bench, results):
     assert sorted(again) == [("diffuse", "broken"), ("mirror", "broken")]
     with pytest.raises(BenchError, match="run with other settings \\(eval_spp: 16, now 32\\)"):
         run_benchmark(bench[0], res, ["oracle"], eval_spp=32, progress=False, fit=_stub_fit([]))
+
+
+@pytest.mark.mitsuba
+def test_objects_outside_the_recovered_light(bench, tmp_path):
+    """The share of each view's object surface a recovered emitter leaves outside, checked against
+    the points' own distances for constant-depth emitters, and its place in the report."""
+    from roomlight.bench.report import outside_cases, write_tables
+    from roomlight.bench.runner import objects_outside
+    from roomlight.scene.build import load_scene, scene_points
+
+    out, manifest = bench
+    scene = load_scene(out / manifest["scenes"][0]["scene"])
+    truth = scene.emitter.load()
+    rad = torch.from_numpy(truth.radiance)
+    dist = {v: scene_points(scene, scene.view(v).objects, 256, seed=0).double().norm(dim=1).numpy()
+            for v in ("input", "eval")}
+    far = max(d.max() for d in dist.values())
+    near = min(d.min() for d in dist.values())
+    mid = float(np.median(dist["eval"]))
+    for depth, expect in ((2 * far, 0.0), (0.5 * near, 1.0), (mid, None)):
+        got = objects_outside(scene, SimpleNamespace(radiance=rad, depth=torch.full((16, 32), depth),
+                                                     emitter_kind="mesh"))
+        for view in ("input", "eval"):
+            want = float((dist[view] > depth).mean()) if expect is None else expect
+            assert got[view] == pytest.approx(want, abs=1e-12)  # bilinear lookup of a constant map: exact
+    assert 0.3 < objects_outside(scene, SimpleNamespace(radiance=rad, depth=torch.full((16, 32), mid),
+                                                        emitter_kind="mesh"))["eval"] < 0.7
+    sphere = SimpleNamespace(radiance=rad, depth=None, emitter_kind=f"sphere:{0.5 * near}")
+    assert objects_outside(scene, sphere) == {"input": 1.0, "eval": 1.0}
+    assert objects_outside(scene, SimpleNamespace(radiance=rad, depth=None, emitter_kind="envmap")) is None
+    # The report lists the cases with part of the probe outside, worst first.
+    metrics = {"psnr_ldr": 20.0, "rmse_hdr": 0.1, "angular_error": 2.0, "pixels": 10}
+    records = [{"scene": f"s{i}/diffuse", "panorama": f"s{i}", "material": "diffuse", "method": "prior",
+                "emitter_kind": "mesh", "metrics": {"input": metrics, "eval": metrics}, "fit_seconds": 1.0,
+                "outside": {"input": 0.0, "eval": share}} for i, share in enumerate((0.0, 0.25, 1.0))]
+    assert [o["case"] for o in outside_cases(records)] == ["s2/diffuse/prior", "s1/diffuse/prior"]
+    paths = write_tables(records, tmp_path)
+    md = paths["markdown"].read_text()
+    assert "## Probes outside the recovered light" in md and "| s2/diffuse/prior | 100 % | 20.00 |" in md
+    assert "s0/diffuse/prior" not in md.split("## Probes outside")[1]
+    assert json.loads(paths["json"].read_text())["outside"]["eval"][1]["share"] == 0.25
+    assert paths["cases"].read_text().splitlines()[0].endswith(",outside")
 
 
 def test_shards_partition_the_cases(bench):

@@ -7,13 +7,17 @@ input view (the fitted objects) is the supplementary "fitted view" table.
 
 Files written to ``OUT`` (default ``RES/report``):
 
-- ``report.md``     both tables, case counts, failed cases, mean fit time per method
+- ``report.md``     both tables, case counts, failed cases, mean fit time per method, and the
+  cases whose recovered light leaves part of the probe outside it
 - ``table.csv``     the evaluation-view table, wide: ``<metric>_<material>_{mean,std,n}``
 - ``table_input.csv`` the same for the input view
-- ``cases.csv``     one row per case and view with every metric (long format)
+- ``cases.csv``     one row per case and view with every metric (long format) and ``outside``,
+  the share of the view's objects' surface the recovered emitter does not enclose (empty for an
+  environment map)
 - ``summary.json``  ``{"views": {view: {method: {material: {metric: {mean, std, n}}}}},
   "paired": {view: {baseline: {material: {metric: {mean, ci95, wins, n}}}}}, ...}`` (paired:
-  per-scene differences prior - baseline, :mod:`roomlight.bench.paired`)
+  per-scene differences prior - baseline, :mod:`roomlight.bench.paired`; "outside": {view:
+  [{case, share, psnr_ldr}]}, the cases with a share above 0)
 - ``figures/*.png`` and ``index.html`` (see :mod:`roomlight.bench.figures`)
 """
 
@@ -83,14 +87,24 @@ def _cases_csv(path: Path, records: list[dict]) -> None:
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["scene", "panorama", "material", "method", "emitter_kind", "view", *METRICS, "pixels",
-                    "fit_seconds", "best_iteration"])
+                    "fit_seconds", "best_iteration", "outside"])
         for r in records:
             for view in VIEWS:
                 m = r["metrics"].get(view)
                 if m:
                     w.writerow([r["scene"], r.get("panorama", ""), r["material"], r["method"],
                                 r.get("emitter_kind", ""), view, *[m[k] for k in METRICS], m.get("pixels", ""),
-                                r.get("fit_seconds", ""), r.get("best_iteration", "")])
+                                r.get("fit_seconds", ""), r.get("best_iteration", ""),
+                                (r.get("outside") or {}).get(view, "")])
+
+
+def outside_cases(records: list[dict], view: str = "eval") -> list[dict]:
+    """Cases whose recovered emitter leaves part of the view's objects outside it (results
+    written before this was recorded have no ``outside`` and are not listed)."""
+    rows = [{"case": f"{r['scene']}/{r['method']}", "share": float(r["outside"][view]),
+             "psnr_ldr": float(r["metrics"][view]["psnr_ldr"])}
+            for r in records if (r.get("outside") or {}).get(view, 0) > 0 and view in r["metrics"]]
+    return sorted(rows, key=lambda x: -x["share"])
 
 
 def _timing(records: list[dict]) -> dict[str, dict]:
@@ -117,6 +131,7 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
                "methods": ordered({r["method"] for r in records}, METHOD_ORDER),
                "materials": ordered({r["material"] for r in records}, MATERIAL_ORDER),
                "timing": timing, "failed": [f.get("case", "?") for f in failures],
+               "outside": {v: outside_cases(records, v) for v in VIEWS},
                "std": "population standard deviation over scenes (ddof = 0)",
                "paired": {v: paired_differences(records, "prior", v) for v in VIEWS},
                "paired_note": ("per-scene difference prior - baseline: mean, 95 % percentile-bootstrap "
@@ -134,6 +149,13 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
           "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
     for m in ordered(timing, METHOD_ORDER):
         md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")
+    outside = summary["outside"]["eval"]
+    if outside:
+        md += ["", "## Probes outside the recovered light", "",
+               "Cases whose recovered emitter does not enclose the whole evaluation probe (share of its "
+               "surface outside): the probe is hidden behind the emitter and sees only its back faces, "
+               "which emit nothing.", "", "| case | outside | PSNR LDR |", "|---|---:|---:|"]
+        md += [f"| {o['case']} | {100 * o['share']:.0f} % | {o['psnr_ldr']:.2f} |" for o in outside]
     if failures:
         md += ["", "## Failed cases", ""]
         md += [f"- `{f.get('case', '?')}`: {f.get('type', '')}: {f.get('error', '')}" for f in failures]

@@ -12,7 +12,8 @@ Layout of ``RES``::
 
     RES/run.json                                   settings (checked on resume)
     RES/cases/<panorama>/<material>/<method>/
-        result.json      metrics, timings, emitter kind (written last: marks the case done)
+        result.json      metrics, timings, emitter kind, and per view the share of its objects'
+                         surface outside the recovered emitter (written last: marks the case done)
         recovered.exr    recovered radiance (+ Z depth when it has one)
         input.exr, eval.exr                        renders under the recovered emitter
         fit/             the fit's own outputs (history, emitter bundle, loss curve, ...)
@@ -153,6 +154,42 @@ def _write_recovered(path: Path, result) -> None:
                    half=False, metadata={"emitter_kind": str(result.emitter_kind)})
 
 
+def emitter_depth(result) -> torch.Tensor | None:
+    """(H, W) float64 depth of a recovered emitter: its own map, a constant for a sphere proxy,
+    None for an environment map (light at infinity encloses everything)."""
+    from roomlight.emitter.kind import parse_emitter_kind
+    from roomlight.emitter.sphere import sphere_depth
+
+    if result.depth is not None:
+        return result.depth.detach().double().cpu()
+    kind = parse_emitter_kind(result.emitter_kind)
+    if kind.name == "sphere":
+        return sphere_depth(8, 16, kind.radius, dtype=torch.float64)
+    return None
+
+
+def objects_outside(scene, result, per_object: int = 256) -> dict[str, float] | None:
+    """Per view, the share of its objects' surface points that the recovered emitter does not
+    enclose (negative clearance, :func:`roomlight.inverse.repulsion.clearance`); None for an
+    environment map.
+
+    An object outside a 2.5D light is hidden behind it from the capture point and sees only its
+    back faces, which emit nothing, so a case whose evaluation share is above 0 explains a bad
+    score by where the light ended up rather than by what it looks like.
+    """
+    from roomlight.inverse.repulsion import clearance
+    from roomlight.scene.build import scene_points
+
+    depth = emitter_depth(result)
+    if depth is None:
+        return None
+    shares = {}
+    for view in VIEWS:
+        points = scene_points(scene, scene.view(view).objects, per_object, seed=0).double()
+        shares[view] = float((clearance(depth, points) < 0).double().mean())
+    return shares
+
+
 def _write_render(path: Path, img: torch.Tensor) -> None:
     from roomlight.io import write_exr
 
@@ -202,6 +239,7 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
         "iterations": sum(1 for h in history if "total" in h) if history else None,
         "nonfinite_steps": getattr(result, "nonfinite_steps", None),
         "recovered_resolution": list(result.radiance.shape[:2]), "eval_spp": eval_spp,
+        "outside": objects_outside(scene, result),
         "files": {"recovered": "recovered.exr", "input": "input.exr", "eval": "eval.exr", "fit": "fit"},
     }
     err = cdir / "error.json"
