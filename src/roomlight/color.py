@@ -21,7 +21,7 @@ import numpy as np
 
 __all__ = [
     "REC709_LUMA", "LOG_EPS", "MIDDLE_GREY", "DISPLAY_GAMMA",
-    "luminance_np", "luminance_torch", "log_average_np", "log_average_torch",
+    "luminance_np", "luminance_torch", "peak_and_median_luminance", "log_average_np", "log_average_torch",
     "to_display", "to_display_torch", "to_display_at_key", "display_to_uint8", "display_to_linear",
     "srgb_to_linear", "linear_to_srgb",
 ]
@@ -65,6 +65,15 @@ def luminance_torch(rgb, keepdim: bool = False):
     wr, wg, wb = REC709_LUMA
     y = wr * rgb[..., 0, :, :] + wg * rgb[..., 1, :, :] + wb * rgb[..., 2, :, :]
     return y.unsqueeze(-3) if keepdim else y
+
+
+def peak_and_median_luminance(rgb) -> tuple:
+    """(B,), (B,) brightest and median Rec.709 luminance (float64) of (B, 3, H, W) linear RGB.
+
+    The median of an even count is the lower of the two middle values (torch's rule).
+    """
+    lum = luminance_torch(rgb.double()).flatten(1)
+    return lum.amax(1), lum.median(1).values
 
 
 def log_average_np(rgb, mask=None) -> float:

@@ -19,11 +19,11 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
-from roomlight.color import MIDDLE_GREY, log_average_torch, luminance_torch, to_display_at_key
+from roomlight.color import MIDDLE_GREY, log_average_torch, luminance_torch, peak_and_median_luminance, to_display_at_key
 from roomlight.errors import ShapeError
 
 __all__ = ["LDR_KEY", "log_average_luminance", "to_ldr", "psnr", "psnr_hdr", "ssim", "abs_rel",
-           "peak_error_stops", "peak_and_median_luminance", "peak_contrast", "gaussian_window"]
+           "peak_error_stops", "peak_contrast", "gaussian_window"]
 
 #: Log-average luminance the LDR mapping exposes to ("middle grey").
 LDR_KEY = MIDDLE_GREY
@@ -104,12 +104,6 @@ def peak_error_stops(pred: torch.Tensor, target: torch.Tensor, floor: float = 1e
     peak_p = luminance_torch(pred.double()).flatten(1).amax(1).clamp_min(floor)
     peak_t = luminance_torch(target.double()).flatten(1).amax(1).clamp_min(floor)
     return torch.log2(peak_p / peak_t).abs()
-
-
-def peak_and_median_luminance(radiance: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """(B,), (B,) brightest and median Rec. 709 luminance (float64) of (B, 3, H, W) linear panoramas."""
-    lum = luminance_torch(radiance.double()).flatten(1)
-    return lum.amax(1), lum.median(1).values
 
 
 def peak_contrast(radiance: torch.Tensor) -> torch.Tensor:

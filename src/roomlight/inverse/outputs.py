@@ -29,7 +29,7 @@ def light_summary(radiance: torch.Tensor) -> dict:
         as :func:`roomlight.eval.metrics.peak_contrast`) and ``extreme`` (contrast above
         :data:`EXTREME_CONTRAST`).
     """
-    from roomlight.eval.metrics import peak_and_median_luminance
+    from roomlight.color import peak_and_median_luminance
 
     peak, median = (float(v[0]) for v in peak_and_median_luminance(radiance.detach().permute(2, 0, 1)[None]))
     contrast = peak / max(median, 1e-12)
