@@ -283,7 +283,7 @@ def test_objects_outside_the_recovered_light(bench, tmp_path):
     """The share of each view's object surface a recovered emitter leaves outside, checked against
     the points' own distances for constant-depth emitters, and its place in the report."""
     from roomlight.bench.report import outside_cases, write_tables
-    from roomlight.bench.runner import objects_outside
+    from roomlight.bench.runner import emitter_depth, objects_outside
     from roomlight.scene.build import load_scene, scene_points
 
     out, manifest = bench
@@ -296,16 +296,17 @@ def test_objects_outside_the_recovered_light(bench, tmp_path):
     near = min(d.min() for d in dist.values())
     mid = float(np.median(dist["eval"]))
     for depth, expect in ((2 * far, 0.0), (0.5 * near, 1.0), (mid, None)):
-        got = objects_outside(scene, SimpleNamespace(radiance=rad, depth=torch.full((16, 32), depth),
-                                                     emitter_kind="mesh"))
+        got = objects_outside(scene, emitter_depth(SimpleNamespace(radiance=rad, depth=torch.full((16, 32), depth),
+                                                                   emitter_kind="mesh")))
         for view in ("input", "eval"):
             want = float((dist[view] > depth).mean()) if expect is None else expect
             assert got[view] == pytest.approx(want, abs=1e-12)  # bilinear lookup of a constant map: exact
-    assert 0.3 < objects_outside(scene, SimpleNamespace(radiance=rad, depth=torch.full((16, 32), mid),
-                                                        emitter_kind="mesh"))["eval"] < 0.7
-    sphere = SimpleNamespace(radiance=rad, depth=None, emitter_kind=f"sphere:{0.5 * near}")
+    assert 0.3 < objects_outside(scene, torch.full((16, 32), mid))["eval"] < 0.7
+    sphere = emitter_depth(SimpleNamespace(radiance=rad, depth=None, emitter_kind=f"sphere:{0.5 * near}"))
+    assert sphere.shape == rad.shape[:2] and torch.all(sphere == torch.tensor(0.5 * near, dtype=torch.float32))
     assert objects_outside(scene, sphere) == {"input": 1.0, "eval": 1.0}
-    assert objects_outside(scene, SimpleNamespace(radiance=rad, depth=None, emitter_kind="envmap")) is None
+    assert emitter_depth(SimpleNamespace(radiance=rad, depth=None, emitter_kind="envmap")) is None
+    assert objects_outside(scene, None) is None
     # The report lists the cases with part of the probe outside, worst first.
     metrics = {"psnr_ldr": 20.0, "rmse_hdr": 0.1, "angular_error": 2.0, "pixels": 10}
     records = [{"scene": f"s{i}/diffuse", "panorama": f"s{i}", "material": "diffuse", "method": "prior",

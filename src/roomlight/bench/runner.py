@@ -140,38 +140,33 @@ def _json_default(obj):
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
-def _write_recovered(path: Path, result) -> None:
-    from roomlight.emitter.sphere import sphere_depth
-    from roomlight.io import write_panorama
-    from roomlight.emitter.kind import parse_emitter_kind
-
-    rad = result.radiance.detach().float().cpu()
-    depth = result.depth
-    kind = parse_emitter_kind(result.emitter_kind)
-    if depth is None and kind.name == "sphere":
-        depth = sphere_depth(rad.shape[0], rad.shape[1], kind.radius)
-    write_panorama(path, (rad.numpy(), None if depth is None else depth.detach().float().cpu().numpy()),
-                   half=False, metadata={"emitter_kind": str(result.emitter_kind)})
-
-
 def emitter_depth(result) -> torch.Tensor | None:
-    """(H, W) float64 depth of a recovered emitter: its own map, a constant for a sphere proxy,
-    None for an environment map (light at infinity encloses everything)."""
+    """(H, W) float32 depth of a recovered emitter at its radiance's resolution: its own map, a
+    constant for a sphere proxy, None for an environment map (light at infinity)."""
     from roomlight.emitter.kind import parse_emitter_kind
     from roomlight.emitter.sphere import sphere_depth
 
     if result.depth is not None:
-        return result.depth.detach().double().cpu()
+        return result.depth.detach().float().cpu()
     kind = parse_emitter_kind(result.emitter_kind)
     if kind.name == "sphere":
-        return sphere_depth(8, 16, kind.radius, dtype=torch.float64)
+        return sphere_depth(result.radiance.shape[0], result.radiance.shape[1], kind.radius)
     return None
 
 
-def objects_outside(scene, result, per_object: int = 256) -> dict[str, float] | None:
-    """Per view, the share of its objects' surface points that the recovered emitter does not
-    enclose (negative clearance, :func:`roomlight.inverse.repulsion.clearance`); None for an
-    environment map.
+def _write_recovered(path: Path, result, depth: torch.Tensor | None) -> None:
+    """``recovered.exr``: the radiance, and ``depth`` (:func:`emitter_depth`) as Z when there is one."""
+    from roomlight.io import write_panorama
+
+    rad = result.radiance.detach().float().cpu()
+    write_panorama(path, (rad.numpy(), None if depth is None else depth.numpy()),
+                   half=False, metadata={"emitter_kind": str(result.emitter_kind)})
+
+
+def objects_outside(scene, depth: torch.Tensor | None, per_object: int = 256) -> dict[str, float] | None:
+    """Per view, the share of its objects' surface points that an emitter of this ``depth``
+    (:func:`emitter_depth`) does not enclose (negative clearance,
+    :func:`roomlight.inverse.repulsion.clearance`); None for an environment map (no depth).
 
     An object outside a 2.5D light is hidden behind it from the capture point and sees only its
     back faces, which emit nothing, so a case whose evaluation share is above 0 explains a bad
@@ -180,9 +175,9 @@ def objects_outside(scene, result, per_object: int = 256) -> dict[str, float] | 
     from roomlight.inverse.repulsion import clearance
     from roomlight.scene.build import scene_points
 
-    depth = emitter_depth(result)
     if depth is None:
         return None
+    depth = depth.double()
     shares = {}
     for view in VIEWS:
         points = scene_points(scene, scene.view(view).objects, per_object, seed=0).double()
@@ -218,7 +213,8 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
     else:
         result = fit(scene, case.method, fit_config, out_dir=cdir / "fit", model=model, progress=progress)
     fit_seconds = time.perf_counter() - t0
-    _write_recovered(cdir / "recovered.exr", result)
+    depth = emitter_depth(result)
+    _write_recovered(cdir / "recovered.exr", result, depth)
     t1 = time.perf_counter()
     metrics = {}
     for view in VIEWS:
@@ -239,7 +235,7 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
         "iterations": sum(1 for h in history if "total" in h) if history else None,
         "nonfinite_steps": getattr(result, "nonfinite_steps", None),
         "recovered_resolution": list(result.radiance.shape[:2]), "eval_spp": eval_spp,
-        "outside": objects_outside(scene, result),
+        "outside": objects_outside(scene, depth),
         "files": {"recovered": "recovered.exr", "input": "input.exr", "eval": "eval.exr", "fit": "fit"},
     }
     err = cdir / "error.json"

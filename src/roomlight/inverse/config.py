@@ -10,6 +10,10 @@ from roomlight.errors import RoomlightError
 __all__ = ["FitConfig", "FIT_PRESETS", "fit_config"]
 
 
+#: Values of ``FitConfig.repulsion_objects``.
+REPULSION_OBJECTS = ("scene", "view")
+
+
 @dataclass(frozen=True)
 class FitConfig(StrictConfig):
     """Every knob of a fit; the defaults are the paper's settings."""
@@ -50,10 +54,6 @@ class FitConfig(StrictConfig):
         if self.repulsion_objects not in REPULSION_OBJECTS:
             raise RoomlightError(f"fit setting repulsion_objects must be one of {', '.join(REPULSION_OBJECTS)}, "
                                  f"not {self.repulsion_objects!r}")
-
-
-#: Values of ``FitConfig.repulsion_objects``.
-REPULSION_OBJECTS = ("scene", "view")
 
 
 #: ``paper`` = the paper's settings; ``fast`` = a CPU-friendly setting for benchmarks and demos.
