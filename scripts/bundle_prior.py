@@ -28,16 +28,16 @@ from pathlib import Path
 
 import torch
 
+from roomlight.errors import RoomlightError
 from roomlight.model.panovae import CONFIG_NAME, WEIGHTS_NAME, PanoVAE
 from roomlight.model.runs import resolve_run_model
 from roomlight.model.weights import file_sha256
 
 
-def _best_step(run: Path) -> int | None:
-    for cand in (run / "best" / "best.json", run / "best.json"):
-        if cand.exists():
-            return int(json.loads(cand.read_text())["step"])
-    return None
+def _best_step(model_dir: Path) -> int | None:
+    """The step ``roomlight train`` recorded with its best model (``RUN/best/best.json``), if any."""
+    record = model_dir / "best.json"
+    return int(json.loads(record.read_text())["step"]) if record.exists() else None
 
 
 def bundled_config(new_cfg: dict, old_cfg: dict | None, data: str, best_step: int | None,
@@ -87,8 +87,7 @@ def main(argv: list[str] | None = None) -> int:
                  "pass --allow-new-architecture if that is intended")
     if old_cfg is not None and old_cfg.get("weights_sha256") == file_sha256(src / WEIGHTS_NAME):
         sys.exit(f"{dest} already holds these weights")
-    run = Path(args.source)
-    cfg = bundled_config(new_cfg, old_cfg, args.data, _best_step(run), args.previous_note)
+    cfg = bundled_config(new_cfg, old_cfg, args.data, _best_step(src), args.previous_note)
     text = json.dumps(cfg, indent=2, default=str) + "\n"
     if args.dry_run:
         print(text)
@@ -100,10 +99,11 @@ def main(argv: list[str] | None = None) -> int:
     tmp = Path(tempfile.mkdtemp(prefix=".bundle-", dir=dest.parent))
     shutil.copyfile(src / WEIGHTS_NAME, tmp / WEIGHTS_NAME)
     (tmp / CONFIG_NAME).write_text(text)
-    if file_sha256(tmp / WEIGHTS_NAME) != cfg["weights_sha256"]:
+    try:  # loading verifies the copy against the recorded weights_sha256
+        loaded, reference = PanoVAE.from_pretrained(tmp), PanoVAE.from_pretrained(src)
+    except RoomlightError as e:
         shutil.rmtree(tmp)
-        sys.exit("copy does not match the source's recorded checksum")
-    loaded, reference = PanoVAE.from_pretrained(tmp), PanoVAE.from_pretrained(src)
+        sys.exit(f"the copy does not load: {e}")
     a, b = loaded.state_dict(), reference.state_dict()
     if a.keys() != b.keys() or not all(torch.equal(a[k], b[k]) for k in a):
         shutil.rmtree(tmp)
