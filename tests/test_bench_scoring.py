@@ -158,7 +158,7 @@ def test_paired_differences_hand_computed(tmp_path):
 def test_bootstrap_interval_matches_the_normal_approximation():
     """For many scenes the percentile bootstrap of a mean approaches mean +- 1.96 s / sqrt(n)
     (s: the population standard deviation, which is what the bootstrap resamples)."""
-    from roomlight.bench.paired import bootstrap_mean_interval
+    from roomlight.stats import bootstrap_mean_interval
 
     x = np.random.default_rng(3).normal(1.0, 2.0, 400)
     lo, hi = bootstrap_mean_interval(x)

@@ -211,3 +211,36 @@ def test_radiance_only_evaluation_of_panoramas_without_depth(setup, tmp_path):
     res = CliRunner().invoke(cli, args + ["--radiance-only"])
     assert res.exit_code == 0, res.output
     assert "| latent fit (radiance) |" in res.output
+
+
+def test_eval_prior_names_the_latent_fit_objective(setup, tmp_path):
+    from roomlight.cli import eval_prior
+    from roomlight.cli.common import RoomlightGroup
+
+    root, _, model = setup
+    model.save_pretrained(tmp_path / "m")
+
+    @click.group(cls=RoomlightGroup)
+    def cli():
+        pass
+
+    cli.add_command(eval_prior.command)
+    args = ["eval-prior", "--model", str(tmp_path / "m"), "--data", str(root), "--fit-steps", "3", "--limit", "2"]
+    res = CliRunner().invoke(cli, args + ["--out", str(tmp_path / "paper")])
+    assert res.exit_code == 0, res.output
+    assert "from z = 0; squared error of the normalised channels (the paper's protocol)" in res.output
+    res = CliRunner().invoke(cli, args + ["--out", str(tmp_path / "w"), "--set", "init_from_encoder=true",
+                                          "--set", "depth_weight=4", "--set", "peak_weight=0.1"])
+    assert res.exit_code == 0, res.output
+    md = (tmp_path / "w" / "eval_prior.md").read_text()
+    assert "from the encoder's mean" in md and "depth weighted 4×" in md and "0.1 × log-L1" in md
+    assert "paper's protocol" not in md
+    rep = json.loads((tmp_path / "w" / "eval_prior.json").read_text())
+    assert rep["fit"]["depth_weight"] == 4 and rep["fit"]["peak_weight"] == 0.1
+    # A report written before the objective had weights still renders, as the paper's protocol.
+    for key in ("depth_weight", "peak_weight", "peak_fraction"):
+        del rep["fit"][key]
+    rep["fit"]["init_from_encoder"] = False
+    assert "(the paper's protocol)" in report_markdown(rep)
+    res = CliRunner().invoke(cli, args + ["--set", "peak_weight=-1"])
+    assert res.exit_code != 0 and ">= 0" in res.output and "Traceback" not in res.output

@@ -158,6 +158,20 @@ def test_fit_pano_cli_writes_a_better_fit(model, toy, tmp_path):
     res = CliRunner().invoke(_cli(fit_pano), ["fit-pano", "--model", str(tmp_path / "m"), str(tmp_path / "rgb.exr"),
                                               "--target", "both"])
     assert res.exit_code != 0 and "needs depth" in res.output
+    res = CliRunner().invoke(_cli(fit_pano), ["fit-pano", "--model", str(tmp_path / "m"), str(tmp_path / "rgb.exr"),
+                                              "--depth-weight", "3"])
+    assert res.exit_code != 0 and "needs --target both" in res.output and "Traceback" not in res.output
+    # The weighted objective from the encoder's mean: its settings are recorded, its objective is lower
+    # than at the start.
+    res = CliRunner().invoke(_cli(fit_pano), ["fit-pano", "--model", str(tmp_path / "m"), str(pano), "--steps", "10",
+                                              "--init", "encoder", "--depth-weight", "3", "--peak-weight", "0.2",
+                                              "--no-emitter", "--out", str(tmp_path / "wfit")])
+    assert res.exit_code == 0, res.output
+    rec = json.loads((tmp_path / "wfit" / "latent.json").read_text())
+    assert rec["fit"]["depth_weight"] == 3 and rec["fit"]["peak_weight"] == 0.2 and rec["fit"]["init_from_encoder"]
+    with torch.no_grad():
+        z_enc = model.encode(rad[:1], dep[:1]).mean
+    assert rec["objective"] <= float(_slow_weighted_objective(model, rad[:1], dep[:1], z_enc, 3.0, 0.2)[0]) + 1e-6
 
 
 def test_convert_cli_writes_a_loadable_checkpoint(tmp_path):
@@ -206,3 +220,68 @@ def test_latent_fit_config_is_strict_and_round_trips():
         cfg.override(stpes=3)
     with pytest.raises(RoomlightError, match="unknown field"):
         LatentFitConfig.from_dict({"steps": 3, "learning_rate": 0.1})
+
+
+def _slow_weighted_objective(model, rad, dep, z, depth_weight, peak_weight, fraction=0.005):
+    """The weighted latent-fit objective written out pixel by pixel, one panorama at a time."""
+    import math
+
+    x = model.normalization.normalize(rad, dep)
+    with torch.no_grad():
+        x_hat = model.decode_normalized(z)
+        pred, _ = model.normalization.denormalize(x_hat)
+    out = []
+    for i in range(rad.shape[0]):
+        mse = [float((x_hat[i, c] - x[i, c]).pow(2).mean()) for c in range(4)]
+        value = (mse[0] + mse[1] + mse[2] + depth_weight * mse[3]) / (3 + depth_weight)
+        if peak_weight:
+            h, w = rad.shape[-2:]
+            k = max(1, math.ceil(fraction * h * w))
+
+            def lum(img):
+                return [0.2126 * float(img[0, p // w, p % w]) + 0.7152 * float(img[1, p // w, p % w])
+                        + 0.0722 * float(img[2, p // w, p % w]) for p in range(h * w)]
+
+            brightest = set()
+            for img in (pred[i], rad[i].clamp_min(0.0)):
+                values = lum(img)
+                brightest |= set(sorted(range(h * w), key=lambda p: -values[p])[:k])
+            err = [abs(math.log(float(pred[i, c, p // w, p % w]) + 1e-6)
+                       - math.log(float(rad[i, c, p // w, p % w].clamp_min(0.0)) + 1e-6))
+                   for p in brightest for c in range(3)]
+            value += peak_weight * sum(err) / len(err)
+        out.append(value)
+    return torch.tensor(out)
+
+
+def test_weighted_objective_matches_a_pixel_by_pixel_computation(model, toy):
+    _, rad, dep = toy
+    z = torch.randn(3, model.config.latent_dim, generator=torch.Generator().manual_seed(2)) * 0.5
+    for depth_weight, peak_weight in ((1.0, 0.0), (3.0, 0.0), (3.0, 0.2), (0.5, 1.0)):
+        cfg = LatentFitConfig(steps=0, depth_weight=depth_weight, peak_weight=peak_weight)
+        res = fit_latent(model, rad, dep, cfg, z0=z)  # 0 steps: the objective at z
+        expected = _slow_weighted_objective(model, rad, dep, z, depth_weight, peak_weight)
+        torch.testing.assert_close(res.loss, expected.to(res.loss.dtype), rtol=1e-4, atol=1e-6)
+    assert LatentFitConfig().is_paper_protocol and not LatentFitConfig(peak_weight=0.1).is_paper_protocol
+
+
+def test_weighted_fit_lowers_its_objective_independently_of_the_batch(model, toy):
+    _, rad, dep = toy
+    cfg = LatentFitConfig(steps=25, depth_weight=3.0, peak_weight=0.2)
+    z0 = torch.zeros(3, model.config.latent_dim)
+    start = _slow_weighted_objective(model, rad, dep, z0, 3.0, 0.2)
+    both = fit_latent(model, rad[:2], dep[:2], cfg)
+    assert torch.all(both.loss < start[:2] - 0.02), (start, both.loss)
+    torch.testing.assert_close(both.loss, _slow_weighted_objective(model, rad[:2], dep[:2], both.z, 3.0, 0.2),
+                               rtol=1e-4, atol=1e-6)
+    one = fit_latent(model, rad[1:2], dep[1:2], cfg)
+    torch.testing.assert_close(both.z[1:2], one.z, rtol=1e-4, atol=1e-5)
+
+
+def test_weighted_objective_settings_are_checked():
+    with pytest.raises(RoomlightError, match="peak term needs radiance"):
+        LatentFitConfig(target="depth", peak_weight=0.1)
+    with pytest.raises(RoomlightError, match=">= 0"):
+        LatentFitConfig(peak_weight=-1.0)
+    with pytest.raises(RoomlightError, match="peak_fraction"):
+        LatentFitConfig(peak_fraction=0.0)

@@ -26,12 +26,13 @@ LAYERS = [
     ["eval", "bench", "synth", "prepare"],
     ["photo"],
     ["inverse", "data"],
-    ["scene", "fit", "losses", "model", "examples"],
+    ["scene", "fit", "model", "examples"],
+    ["losses"],
     ["render"],
     ["emitter"],
     ["io"],
     ["geometry"],
-    ["color", "config", "progress", "cluster"],
+    ["color", "config", "progress", "cluster", "stats"],
     ["errors"],
 ]
 

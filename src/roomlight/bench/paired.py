@@ -17,30 +17,10 @@ import math
 import numpy as np
 
 from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
+from roomlight.stats import RESAMPLES, bootstrap_mean_interval
 
+# bootstrap_mean_interval stays importable from here, where it was first defined.
 __all__ = ["bootstrap_mean_interval", "paired_differences", "paired_markdown"]
-
-#: Number of bootstrap resamples (the interval's Monte Carlo error is ~0.5 % of its width).
-RESAMPLES = 10000
-
-
-def bootstrap_mean_interval(values, level: float = 0.95, resamples: int = RESAMPLES,
-                            seed: int = 0) -> tuple[float, float]:
-    """Percentile-bootstrap interval of the mean of ``values`` (1-D, finite).
-
-    Resamples the values with replacement ``resamples`` times (seeded, so a report is
-    reproducible) and returns the (1 - level)/2 and (1 + level)/2 quantiles of the resampled
-    means. With one value the interval is that value; with none, (nan, nan).
-    """
-    a = np.asarray(values, np.float64)
-    if a.size == 0:
-        return float("nan"), float("nan")
-    if a.size == 1:
-        return float(a[0]), float(a[0])
-    rng = np.random.default_rng(seed)
-    means = a[rng.integers(0, a.size, size=(resamples, a.size))].mean(axis=1)
-    lo, hi = np.quantile(means, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
-    return float(lo), float(hi)
 
 
 def paired_differences(records: list[dict], method: str = "prior", view: str = "eval",

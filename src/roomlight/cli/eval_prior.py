@@ -19,6 +19,14 @@ from roomlight.cli.common import fail, parse_sets, repair_options, sets_option
               help="auto: test/ if the folder has one, else every file.")
 @click.option("--fit-steps", type=int, default=1500, show_default=True,
               help="Latent-fit iterations; 0 skips the fit row.")
+@click.option("--fit-init", type=click.Choice(["zero", "encoder"]), default="zero", show_default=True,
+              help="Latent fit starts from z = 0 (the paper's protocol) or the encoder's posterior mean.")
+@click.option("--depth-weight", type=float, default=1.0, show_default=True,
+              help="Latent fit: weight of the depth channel against each radiance channel (1: the paper's "
+                   "protocol).")
+@click.option("--peak-weight", type=float, default=0.0, show_default=True,
+              help="Latent fit: weight of a log-L1 term over the brightest 0.5 %% of pixels (0: the paper's "
+                   "protocol).")
 @click.option("--depth-only", is_flag=True, help="Add a depth-only latent-fit row.")
 @click.option("--limit", type=int, default=None, help="Evaluate at most this many panoramas.")
 @click.option("--radiance-only", is_flag=True,
@@ -29,7 +37,7 @@ from roomlight.cli.common import fail, parse_sets, repair_options, sets_option
               help="Where eval_prior.md / .json go (default: the --model folder).")
 @repair_options
 @sets_option("LatentFitConfig of the latent-fit rows")
-def command(model_path, data_dir, split, fit_steps, depth_only, radiance_only, limit, batch_size, out_dir,
+def command(model_path, data_dir, split, fit_steps, fit_init, depth_weight, peak_weight, depth_only, radiance_only, limit, batch_size, out_dir,
             clamp_negative, fill_nonfinite, sets):
     """Reconstruction quality of the prior (paper Tab. 1): encoder pass and latent fit.
 
@@ -56,7 +64,10 @@ def command(model_path, data_dir, split, fit_steps, depth_only, radiance_only, l
     ds = PanoramaDataset(files, model.config.resolution, root=data_dir, calibrate=True, depth_units=units,
                          clamp_negative=clamp_negative, fill_nonfinite=fill_nonfinite,
                          require_depth=not radiance_only)
-    fit = LatentFitConfig(steps=fit_steps).override(**parse_sets(sets)) if fit_steps > 0 else None
+    fit = None
+    if fit_steps > 0:
+        fit = LatentFitConfig(steps=fit_steps, init_from_encoder=fit_init == "encoder", depth_weight=depth_weight,
+                              peak_weight=peak_weight).override(**parse_sets(sets))
     report = evaluate_prior(model, ds, fit, batch_size=batch_size, depth_only_fit=depth_only,
                             note=lambda m: click.echo(m, err=True), radiance_only=radiance_only)
     if report["count"] == 0:

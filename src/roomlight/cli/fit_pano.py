@@ -23,13 +23,18 @@ from roomlight.cli.common import echo_fixes, fail, parse_sets, repair_options, s
 @click.option("--lr-final", type=float, default=0.01, show_default=True, help="Learning rate after --steps.")
 @click.option("--init", type=click.Choice(["zero", "encoder"]), default="zero", show_default=True,
               help="Start from z = 0 (the paper's protocol) or the encoder's posterior mean.")
+@click.option("--depth-weight", type=float, default=1.0, show_default=True,
+              help="Weight of the depth channel against each radiance channel (1: the paper's protocol).")
+@click.option("--peak-weight", type=float, default=0.0, show_default=True,
+              help="Weight of a log-L1 term over the brightest 0.5 %% of pixels, which keeps the light "
+                   "sources' intensity (0: the paper's protocol).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: PANO's name + '-fit' next to it).")
 @click.option("--emitter/--no-emitter", default=True, show_default=True,
               help="Also write the fitted panorama as a 2.5D area light bundle (out/emitter).")
 @repair_options
 @sets_option("LatentFitConfig (docs/training.md)")
-def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out_dir, emitter, clamp_negative,
+def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, depth_weight, peak_weight, out_dir, emitter, clamp_negative,
             fill_nonfinite, sets):
     """Fit the prior's latent to panorama PANO (decoder frozen; Adam, lr 0.1 -> 0.01).
 
@@ -62,8 +67,10 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, out
         target = "both" if dep is not None else "radiance"
     if target != "radiance" and dep is None:
         fail(f"{pano}: --target {target} needs depth; pass --depth FILE or use --target radiance")
-    cfg = LatentFitConfig(steps=steps, lr=lr, lr_final=lr_final, target=target,
-                          init_from_encoder=init == "encoder").override(**parse_sets(sets))
+    if target != "both" and depth_weight != 1.0:
+        fail(f"--depth-weight weighs depth against radiance: it needs --target both (got {target})")
+    cfg = LatentFitConfig(steps=steps, lr=lr, lr_final=lr_final, target=target, init_from_encoder=init == "encoder",
+                          depth_weight=depth_weight, peak_weight=peak_weight).override(**parse_sets(sets))
     steps = cfg.steps
     rad_b = rad[None].to(device)
     dep_b = dep[None].to(device) if dep is not None else None

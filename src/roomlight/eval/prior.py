@@ -93,13 +93,18 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         if fit_config is None:
             raise RoomlightError("radiance-only evaluation needs the latent fit (fit steps > 0): "
                                  "the encoder needs depth")
-        rows = {"latent fit (radiance)": fit_config.override(target="radiance")}
+        if fit_config.init_from_encoder:
+            raise RoomlightError("radiance-only evaluation fits from z = 0: the encoder needs depth")
+        rows = {"latent fit (radiance)": fit_config.override(target="radiance", depth_weight=1.0)}
     else:
         rows = {"encoder": None}
         if fit_config is not None:
             rows["latent fit"] = fit_config
             if depth_only_fit:
-                rows["latent fit (depth only)"] = fit_config.override(target="depth")
+                # Depth alone: no radiance, so no peak term, no channel to weigh depth against and no
+                # encoder start (the encoder reads radiance): the supplementary's check, from z = 0.
+                rows["latent fit (depth only)"] = fit_config.override(target="depth", peak_weight=0.0,
+                                                                      depth_weight=1.0, init_from_encoder=False)
     per_image, skipped = [], []
     values: dict[str, dict[str, list]] = {r: {} for r in rows}
     # The bar counts work units: one per batch for the encoder pass, one per latent-fit step, so a
@@ -177,9 +182,9 @@ def report_markdown(report: dict, title: str = "Prior evaluation") -> str:
     if report.get("lpips"):
         lines.append(f"{report['lpips']}.")
     if report.get("fit"):
-        f = report["fit"]
-        lines.append(f"Latent fit: Adam, {f['steps']} steps, lr {f['lr']} → {f['lr_final']} (exponential), "
-                     "squared error of the normalised channels.")
+        # Reports written before the objective had weights lack those fields: their defaults apply.
+        known = {k: v for k, v in report["fit"].items() if k in LatentFitConfig.__dataclass_fields__}
+        lines.append(f"Latent fit: {LatentFitConfig(**known).describe()}.")
     lines.append("LDR: exposure so that the target's log-average luminance is 0.18, clip, gamma 2.2. "
                  "HDR PSNR: peak = the target's maximum. Peak error: |log2| of the ratio of the brightest "
                  "pixels' luminances (the strongest light). AbsRel: mean |D̂ − D| / D.")

@@ -4,7 +4,7 @@ The table has the paper's layout: latent fitting (PSNR, SSIM, LPIPS on LDR; PSNR
 AbsRel) and matte inverse rendering (PSNR LDR, RMSE HDR, RGB angular error of the evaluation
 probe), the best value of each column in bold. Below it, each row's difference to the full model,
 paired by panorama (latent fits) or scene (inverse rendering), with a 95 % percentile-bootstrap
-interval of the mean difference (:func:`roomlight.bench.paired.bootstrap_mean_interval`).
+interval of the mean difference (:func:`roomlight.stats.bootstrap_mean_interval`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.paired import RESAMPLES, bootstrap_mean_interval
+from roomlight.stats import RESAMPLES, bootstrap_mean_interval
 from roomlight.experiments.ablation_rows import ROW_LABELS
 
 __all__ = ["COLUMNS", "ablation_markdown", "paired_to_full", "write_ablation_report"]

@@ -5,7 +5,7 @@ points of the probe-averaged RMSE; the noise floor is the probe-averaged RMSE be
 ground-truth renders. Over rooms:
 
 - each end of the min--max cell is averaged over rooms, with a 95 % percentile-bootstrap interval
-  of that mean (rooms resampled; :func:`roomlight.bench.paired.bootstrap_mean_interval`);
+  of that mean (rooms resampled; :func:`roomlight.stats.bootstrap_mean_interval`);
 - the ratio environment map / 2.5D light of a room is the ratio of their errors averaged over the
   capture points; rooms are summarised by the geometric mean of the ratios (bootstrap interval
   on the logs), their range and the number of rooms where the ratio exceeds 1 and lies in [2, 5]
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.paired import RESAMPLES, bootstrap_mean_interval
+from roomlight.stats import RESAMPLES, bootstrap_mean_interval
 from roomlight.experiments.capacity_record import KIND_LABELS, KINDS, MATERIAL_LABELS, PAPER_RATIO, room_cells
 
 __all__ = ["summarize_capacity", "capacity_markdown", "write_capacity_report"]

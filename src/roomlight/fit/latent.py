@@ -19,8 +19,9 @@ import torch
 
 from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError, ShapeError
+from roomlight.losses.peak import peak_mask
 
-__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS"]
+__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "peak_term", "TARGETS"]
 
 #: Which normalised channels enter the objective.
 TARGETS = {"both": (0, 1, 2, 3), "radiance": (0, 1, 2), "depth": (3,)}
@@ -42,6 +43,15 @@ class LatentFitConfig(StrictConfig):
     target: str = "both"
     #: Start from the encoder's posterior mean instead of z = 0 (needs radiance and depth).
     init_from_encoder: bool = False
+    #: Weight of the depth channel against each radiance channel in the squared error (1: the
+    #: paper's protocol, where depth is one channel of four; no effect unless depth is fitted).
+    depth_weight: float = 1.0
+    #: Weight of a peak term added to the objective: the log-L1 error of linear radiance over the
+    #: brightest ``peak_fraction`` of pixels of the target and of the decoded panorama (the
+    #: training loss's peak term, per panorama). 0: the paper's protocol.
+    peak_weight: float = 0.0
+    #: Share of pixels taken as peaks by the peak term.
+    peak_fraction: float = 0.005
     #: Record the loss every this many steps in :attr:`LatentFitResult.history`.
     history_every: int = 10
 
@@ -51,6 +61,31 @@ class LatentFitConfig(StrictConfig):
             raise RoomlightError(f"LatentFitConfig.target = {self.target!r}: use one of {sorted(TARGETS)}")
         if self.steps < 0 or self.lr <= 0 or self.lr_final <= 0:
             raise RoomlightError("LatentFitConfig: steps must be >= 0 and learning rates > 0")
+        if self.depth_weight < 0 or self.peak_weight < 0:
+            raise RoomlightError("LatentFitConfig: depth_weight and peak_weight must be >= 0")
+        if not 0.0 < self.peak_fraction <= 1.0:
+            raise RoomlightError(f"LatentFitConfig.peak_fraction = {self.peak_fraction}: use a share in (0, 1]")
+        if self.target == "depth" and self.peak_weight > 0:
+            raise RoomlightError("LatentFitConfig: the peak term needs radiance (target 'both' or 'radiance')")
+
+    def describe(self) -> str:
+        """One sentence naming the optimiser, the start and the objective (for reports)."""
+        start = "the encoder's mean" if self.init_from_encoder else "z = 0"
+        objective = "squared error of the normalised channels"
+        if self.depth_weight != 1.0:
+            objective += f", depth weighted {self.depth_weight:g}×"
+        if self.peak_weight > 0:
+            objective += (f", + {self.peak_weight:g} × log-L1 over the brightest "
+                          f"{100 * self.peak_fraction:g} % of pixels")
+        if self.is_paper_protocol and not self.init_from_encoder:
+            objective += " (the paper's protocol)"
+        return (f"Adam, {self.steps} steps, lr {self.lr:g} → {self.lr_final:g} (exponential), from {start}; "
+                f"{objective}")
+
+    @property
+    def is_paper_protocol(self) -> bool:
+        """True when the objective is the paper's plain squared error of the normalised channels."""
+        return self.depth_weight == 1.0 and self.peak_weight == 0.0
 
 
 @dataclass
@@ -86,6 +121,28 @@ def _check_inputs(model, radiance, depth, target):
                              "panoramas without depth)")
 
 
+def _channel_weights(config: LatentFitConfig, channels: list[int], device) -> torch.Tensor:
+    """(C,) weights of the fitted channels, summing to 1 (equal weights: a plain mean)."""
+    w = torch.tensor([config.depth_weight if c == 3 else 1.0 for c in channels], device=device)
+    if float(w.sum()) <= 0:
+        raise RoomlightError("LatentFitConfig: every fitted channel has weight 0")
+    return w / w.sum()
+
+
+def peak_term(pred: torch.Tensor, target: torch.Tensor, fraction: float, eps: float = 1e-6) -> torch.Tensor:
+    """Per-panorama log-L1 error over the union of both panoramas' brightest pixels.
+
+    Args:
+        pred, target: (B, 3, H, W) linear radiance.
+        fraction: share of each panorama's pixels taken as its peaks.
+    Returns:
+        (B,) mean over the masked pixels and the 3 channels of |log(pred + eps) - log(target + eps)|.
+    """
+    mask = peak_mask(pred, target, fraction)  # (B, 1, H, W), a selection: no gradient
+    err = (torch.log(pred.clamp_min(0.0) + eps) - torch.log(target.clamp_min(0.0) + eps)).abs() * mask
+    return err.flatten(1).sum(1) / (3.0 * mask.flatten(1).sum(1))
+
+
 def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
                config: LatentFitConfig = LatentFitConfig(), z0: torch.Tensor | None = None, callback=None) -> LatentFitResult:
     """Optimise one latent per panorama so that the decoder reproduces it.
@@ -114,8 +171,12 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
     rad = radiance if radiance is not None else torch.ones(b, 3, h, w, device=device)
     dep = depth if depth is not None else torch.ones(b, 1, h, w, device=device)
     channels = list(TARGETS[config.target])
+    weights = _channel_weights(config, channels, device).view(1, -1)  # (1, C)
     with torch.no_grad():
         x = norm.normalize(rad.float(), dep.float())[:, channels]
+        # The peak term compares linear radiance as the decoder produces it (clamped like
+        # denormalize), so the target gets the same clamp.
+        rad_target = rad.float().clamp_min(0.0) if config.peak_weight > 0 else None
     was_training = model.training
     # Freeze the decoder for the fit, and give every parameter back the flag it had: a model
     # that is partly frozen (or being trained elsewhere) must come back exactly as it was.
@@ -138,8 +199,12 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
         best_z, best_loss = z.detach().clone(), torch.full((b,), math.inf, device=device)
         history = []
         for step in range(config.steps + 1):
-            x_hat = model.decode_normalized(z)[:, channels]
-            per = (x_hat - x).pow(2).flatten(1).mean(1)  # (B,) this iterate's objective
+            x_full = model.decode_normalized(z)  # (B, 4, H, W)
+            x_hat = x_full[:, channels]
+            per = ((x_hat - x).pow(2).mean((2, 3)) * weights).sum(1)  # (B,) this iterate's objective
+            if rad_target is not None:
+                per = per + config.peak_weight * peak_term(norm.denormalize(x_full)[0], rad_target,
+                                                           config.peak_fraction)
             with torch.no_grad():
                 better = per < best_loss
                 best_loss = torch.where(better, per.detach(), best_loss)

@@ -1,0 +1,47 @@
+"""Compare two ``roomlight eval-prior`` reports room by room, with bootstrap intervals.
+
+Run: .venv/bin/python scripts/compare_prior_evals.py BASE.json OTHER.json
+         [--row "latent fit"] [--other-row ROW] [--labels BASE_LABEL OTHER_LABEL] [--out FILE.md]
+
+Both reports must have been made on the same panoramas (they are paired by file name). BASE and
+OTHER may be the same file with different rows, e.g. --row encoder --other-row "latent fit".
+"""
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from roomlight.errors import RoomlightError
+from roomlight.eval.compare import compare_reports, comparison_markdown
+
+
+def _load(path: str) -> dict:
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        sys.exit(f"error: cannot read the report {path}: {exc}")
+
+
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("base", help="eval_prior.json of the reference")
+    p.add_argument("other", help="eval_prior.json to compare with it")
+    p.add_argument("--row", default="latent fit", help="row of BASE (default: latent fit)")
+    p.add_argument("--other-row", default=None, help="row of OTHER (default: the same as --row)")
+    p.add_argument("--labels", nargs=2, default=None, metavar=("BASE", "OTHER"), help="column titles")
+    p.add_argument("--out", default=None, help="also write the table to this Markdown file")
+    args = p.parse_args(argv)
+    try:
+        cmp = compare_reports(_load(args.base), _load(args.other), args.row, args.other_row)
+    except RoomlightError as exc:
+        sys.exit(f"error: {exc}")
+    labels = args.labels or (None, None)
+    md = comparison_markdown(cmp, *labels)
+    print(md, end="")
+    if args.out:
+        Path(args.out).write_text(md)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,34 @@
+"""Statistics shared by every comparison roomlight reports (benchmarks, ablations, prior evaluations).
+
+A mean over a handful of scenes or rooms hides how sure we are of it; every comparison therefore
+reports a percentile-bootstrap interval of the mean (of a per-item difference, when two methods
+were run on the same items).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["RESAMPLES", "bootstrap_mean_interval"]
+
+#: Number of bootstrap resamples (the interval's Monte Carlo error is ~0.5 % of its width).
+RESAMPLES = 10000
+
+
+def bootstrap_mean_interval(values, level: float = 0.95, resamples: int = RESAMPLES,
+                            seed: int = 0) -> tuple[float, float]:
+    """Percentile-bootstrap interval of the mean of ``values`` (1-D, finite).
+
+    Resamples the values with replacement ``resamples`` times (seeded, so a report is
+    reproducible) and returns the (1 - level)/2 and (1 + level)/2 quantiles of the resampled
+    means. With one value the interval is that value; with none, (nan, nan).
+    """
+    a = np.asarray(values, np.float64)
+    if a.size == 0:
+        return float("nan"), float("nan")
+    if a.size == 1:
+        return float(a[0]), float(a[0])
+    rng = np.random.default_rng(seed)
+    means = a[rng.integers(0, a.size, size=(resamples, a.size))].mean(axis=1)
+    lo, hi = np.quantile(means, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
+    return float(lo), float(hi)
