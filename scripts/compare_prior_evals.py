@@ -5,6 +5,8 @@ Run: .venv/bin/python scripts/compare_prior_evals.py BASE.json OTHER.json
 
 Both reports must have been made on the same panoramas (they are paired by file name). BASE and
 OTHER may be the same file with different rows, e.g. --row encoder --other-row "latent fit".
+Several reports joined by commas (A.json,B.json) are pooled, e.g. two evaluations of different room
+folders; their panoramas must have distinct names.
 """
 
 import argparse
@@ -16,11 +18,20 @@ from roomlight.errors import RoomlightError
 from roomlight.eval.compare import compare_reports, comparison_markdown
 
 
-def _load(path: str) -> dict:
-    try:
-        return json.loads(Path(path).read_text())
-    except (OSError, ValueError) as exc:
-        sys.exit(f"error: cannot read the report {path}: {exc}")
+def _load(paths: str) -> dict:
+    """One report, or several (comma-separated paths) pooled into one."""
+    per_image, seen = [], set()
+    for path in paths.split(","):
+        try:
+            report = json.loads(Path(path).read_text())
+        except (OSError, ValueError) as exc:
+            sys.exit(f"error: cannot read the report {path}: {exc}")
+        for rec in report.get("per_image", []):
+            if rec.get("name") in seen:
+                sys.exit(f"error: {rec.get('name')} is in more than one of {paths}: pooled reports need distinct rooms")
+            seen.add(rec.get("name"))
+            per_image.append(rec)
+    return {"per_image": per_image}
 
 
 def main(argv=None) -> None:

@@ -71,6 +71,16 @@ def test_compare_script_prints_and_writes_the_table(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "difference = weighted − paper" in out.stdout
     assert (tmp_path / "cmp.md").read_text() == out.stdout
+    # Pooling: the room only in BASE goes to its own file; pooled, BASE is the same as before.
+    rooms = BASE["per_image"]
+    (tmp_path / "a1.json").write_text(json.dumps({"per_image": rooms[:3]}))
+    (tmp_path / "a2.json").write_text(json.dumps({"per_image": rooms[3:]}))
+    pooled = subprocess.run([sys.executable, str(script), f"{tmp_path / 'a1.json'},{tmp_path / 'a2.json'}",
+                             str(tmp_path / "b.json"), "--labels", "paper", "weighted"], capture_output=True, text=True)
+    assert pooled.returncode == 0 and pooled.stdout == out.stdout, pooled.stderr
+    twice = subprocess.run([sys.executable, str(script), f"{tmp_path / 'a.json'},{tmp_path / 'a1.json'}",
+                            str(tmp_path / "b.json")], capture_output=True, text=True)
+    assert twice.returncode != 0 and "distinct rooms" in twice.stderr
     bad = subprocess.run([sys.executable, str(script), str(tmp_path / "a.json"), str(tmp_path / "missing.json")],
                          capture_output=True, text=True)
     assert bad.returncode != 0 and "cannot read the report" in bad.stderr and "Traceback" not in bad.stderr

@@ -25,7 +25,7 @@ from roomlight.cli.common import fail, parse_sets, repair_options, sets_option
               help="Latent fit: weight of the depth channel against each radiance channel (1: the paper's "
                    "protocol).")
 @click.option("--peak-weight", type=float, default=0.0, show_default=True,
-              help="Latent fit: weight of a log-L1 term over the brightest 0.5 %% of pixels (0: the paper's "
+              help="Latent fit: weight of a log-L1 term over the brightest 0.5 % of pixels (0: the paper's "
                    "protocol).")
 @click.option("--depth-only", is_flag=True, help="Add a depth-only latent-fit row.")
 @click.option("--limit", type=int, default=None, help="Evaluate at most this many panoramas.")

@@ -26,7 +26,7 @@ from roomlight.cli.common import echo_fixes, fail, parse_sets, repair_options, s
 @click.option("--depth-weight", type=float, default=1.0, show_default=True,
               help="Weight of the depth channel against each radiance channel (1: the paper's protocol).")
 @click.option("--peak-weight", type=float, default=0.0, show_default=True,
-              help="Weight of a log-L1 term over the brightest 0.5 %% of pixels, which keeps the light "
+              help="Weight of a log-L1 term over the brightest 0.5 % of pixels, which keeps the light "
                    "sources' intensity (0: the paper's protocol).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: PANO's name + '-fit' next to it).")

@@ -3,12 +3,14 @@
 - :mod:`roomlight.eval.metrics`   PSNR, SSIM (LDR), HDR PSNR, AbsRel, the LDR tone mapping
 - :func:`evaluate_prior`, :func:`report_markdown`, :func:`write_report`   ``roomlight eval-prior``
 - :func:`load_lpips`              LPIPS only with local weights
+- :func:`compare_reports`         two evaluations room by room, with bootstrap intervals
 - :mod:`roomlight.eval.samples`   prior samples, latent interpolation, probe renders
 - :mod:`roomlight.eval.figures`   the samples figure and interpolation strips
 """
 
 from __future__ import annotations
 
+from roomlight.eval.compare import compare_reports, comparison_markdown
 from roomlight.eval.lpips import load_lpips
 from roomlight.eval.metrics import abs_rel, log_average_luminance, peak_error_stops, psnr, psnr_hdr, ssim, to_ldr
 from roomlight.eval.prior import evaluate_prior, panorama_metrics, report_markdown, write_report
@@ -16,4 +18,5 @@ from roomlight.eval.samples import decode_latents, interpolate_latents, probe_la
 
 __all__ = ["abs_rel", "log_average_luminance", "peak_error_stops", "psnr", "psnr_hdr", "ssim", "to_ldr", "evaluate_prior",
            "panorama_metrics", "report_markdown", "write_report", "load_lpips", "decode_latents",
-           "interpolate_latents", "probe_layout", "render_probes", "sample_latents"]
+           "interpolate_latents", "probe_layout", "render_probes", "sample_latents", "compare_reports",
+           "comparison_markdown"]
