@@ -263,3 +263,23 @@ def test_vae_loss_combines_terms_with_paper_weights():
         assert perfect[k].item() == 0.0
     assert perfect["peak"].item() < 1e-5
     torch.testing.assert_close(perfect["total"], 1e-3 * perfect["kl"] + 0.1 * perfect["peak"])
+
+
+def test_peak_loss_per_sample_is_each_panoramas_own_peak_loss():
+    from roomlight.losses import peak_loss_per_sample
+
+    g = torch.Generator().manual_seed(3)
+    pred = torch.rand(3, 3, 8, 16, generator=g) * torch.tensor([1.0, 5.0, 50.0]).view(3, 1, 1, 1)
+    target = torch.rand(3, 3, 8, 16, generator=g) * 20.0
+    per = peak_loss_per_sample(pred, target, fraction=0.05)
+    assert per.shape == (3,)
+    for i in range(3):  # alone in its batch, each panorama's batch loss is its own value
+        torch.testing.assert_close(per[i], peak_loss(pred[i:i + 1], target[i:i + 1], fraction=0.05))
+    # The batch loss weighs panoramas by their mask sizes; with equal masks it is the plain mean.
+    k = math.ceil(0.05 * 8 * 16)
+    same = torch.zeros(2, 3, 8, 16)
+    same.view(2, 3, -1)[:, :, :k] = 10.0
+    other = same * torch.tensor([2.0, 3.0]).view(2, 1, 1, 1)
+    torch.testing.assert_close(peak_loss(other, same), peak_loss_per_sample(other, same).mean())
+    torch.testing.assert_close(peak_loss_per_sample(other, same), torch.log(torch.tensor([2.0, 3.0])), atol=1e-6,
+                               rtol=1e-5)

@@ -6,6 +6,11 @@ log depth), with the learning rate decayed exponentially from 0.1 to 0.01 over 1
 Targets can be radiance + depth (the paper's protocol: depth is one channel of four, so it gets a
 quarter of the objective), radiance only (panoramas without depth) or depth only.
 
+Beyond the protocol, the objective can weigh the depth channel more (``depth_weight``) and add the
+training loss's peak term per panorama (``peak_weight``), and z can start from the encoder's
+posterior mean (``init_from_encoder``): in the squared error of normalised channels, depth and the
+few pixels of the light sources weigh little, and a fit from z = 0 trades them for radiance.
+
 Each panorama of a batch has its own latent; the objective is the sum over the batch of each
 panorama's mean squared error, so a panorama's fit does not depend on what else is in the batch.
 """
@@ -19,9 +24,9 @@ import torch
 
 from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError, ShapeError
-from roomlight.losses.peak import peak_mask
+from roomlight.losses.peak import peak_loss_per_sample
 
-__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "peak_term", "TARGETS"]
+__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS"]
 
 #: Which normalised channels enter the objective.
 TARGETS = {"both": (0, 1, 2, 3), "radiance": (0, 1, 2), "depth": (3,)}
@@ -129,20 +134,6 @@ def _channel_weights(config: LatentFitConfig, channels: list[int], device) -> to
     return w / w.sum()
 
 
-def peak_term(pred: torch.Tensor, target: torch.Tensor, fraction: float, eps: float = 1e-6) -> torch.Tensor:
-    """Per-panorama log-L1 error over the union of both panoramas' brightest pixels.
-
-    Args:
-        pred, target: (B, 3, H, W) linear radiance.
-        fraction: share of each panorama's pixels taken as its peaks.
-    Returns:
-        (B,) mean over the masked pixels and the 3 channels of |log(pred + eps) - log(target + eps)|.
-    """
-    mask = peak_mask(pred, target, fraction)  # (B, 1, H, W), a selection: no gradient
-    err = (torch.log(pred.clamp_min(0.0) + eps) - torch.log(target.clamp_min(0.0) + eps)).abs() * mask
-    return err.flatten(1).sum(1) / (3.0 * mask.flatten(1).sum(1))
-
-
 def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
                config: LatentFitConfig = LatentFitConfig(), z0: torch.Tensor | None = None, callback=None) -> LatentFitResult:
     """Optimise one latent per panorama so that the decoder reproduces it.
@@ -203,8 +194,8 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
             x_hat = x_full[:, channels]
             per = ((x_hat - x).pow(2).mean((2, 3)) * weights).sum(1)  # (B,) this iterate's objective
             if rad_target is not None:
-                per = per + config.peak_weight * peak_term(norm.denormalize(x_full)[0], rad_target,
-                                                           config.peak_fraction)
+                per = per + config.peak_weight * peak_loss_per_sample(norm.denormalize(x_full)[0], rad_target,
+                                                                      config.peak_fraction)
             with torch.no_grad():
                 better = per < best_loss
                 best_loss = torch.where(better, per.detach(), best_loss)

@@ -12,11 +12,11 @@ from __future__ import annotations
 from roomlight.losses.gradient import SCHARR_U, SCHARR_V, gradient_loss, scharr_gradients
 from roomlight.losses.kl import kl_divergence, kl_weight
 from roomlight.losses.l1 import l1_loss
-from roomlight.losses.peak import luminance, peak_loss, peak_mask, top_fraction_mask
+from roomlight.losses.peak import luminance, peak_loss, peak_loss_per_sample, peak_mask, top_fraction_mask
 from roomlight.losses.total import LossConfig, vae_loss
 
 __all__ = [
     "l1_loss", "gradient_loss", "scharr_gradients", "SCHARR_U", "SCHARR_V", "peak_loss",
-    "peak_mask", "top_fraction_mask", "luminance", "kl_divergence", "kl_weight", "LossConfig",
+    "peak_loss_per_sample", "peak_mask", "top_fraction_mask", "luminance", "kl_divergence", "kl_weight", "LossConfig",
     "vae_loss",
 ]

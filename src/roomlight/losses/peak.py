@@ -18,7 +18,7 @@ from roomlight.color import luminance_torch
 from roomlight.errors import ShapeError
 from roomlight.losses.l1 import check_same_shape
 
-__all__ = ["luminance", "top_fraction_mask", "peak_mask", "peak_loss"]
+__all__ = ["luminance", "top_fraction_mask", "peak_mask", "peak_loss", "peak_loss_per_sample"]
 
 def luminance(rgb: torch.Tensor) -> torch.Tensor:
     """Rec.709 luminance of linear RGB: (B, 3, H, W) -> (B, 1, H, W)."""
@@ -57,6 +57,14 @@ def peak_mask(pred: torch.Tensor, target: torch.Tensor, fraction: float = 0.005)
     return top_fraction_mask(luminance(pred), fraction) | top_fraction_mask(luminance(target), fraction)
 
 
+def _masked_log_error(pred: torch.Tensor, target: torch.Tensor, fraction: float,
+                      eps: float) -> tuple[torch.Tensor, torch.Tensor]:
+    """(B, 3, H, W) |log(pred + eps) - log(target + eps)| zeroed outside the peak mask, and the mask."""
+    mask = peak_mask(pred, target, fraction)  # (B, 1, H, W)
+    err = (torch.log(pred.clamp_min(0.0) + eps) - torch.log(target.clamp_min(0.0) + eps)).abs()
+    return err * mask, mask  # the mask broadcasts over the 3 channels
+
+
 def peak_loss(pred: torch.Tensor, target: torch.Tensor, fraction: float = 0.005,
               eps: float = 1e-6) -> torch.Tensor:
     """Log-L1 over the peak mask (paper eq. 5).
@@ -69,7 +77,17 @@ def peak_loss(pred: torch.Tensor, target: torch.Tensor, fraction: float = 0.005,
     Returns:
         scalar tensor.
     """
-    mask = peak_mask(pred, target, fraction)  # (B, 1, H, W)
-    err = (torch.log(pred.clamp_min(0.0) + eps) - torch.log(target.clamp_min(0.0) + eps)).abs()
-    err = err * mask  # broadcast over the 3 channels
+    err, mask = _masked_log_error(pred, target, fraction, eps)
     return err.sum() / (3.0 * mask.sum())
+
+
+def peak_loss_per_sample(pred: torch.Tensor, target: torch.Tensor, fraction: float = 0.005,
+                         eps: float = 1e-6) -> torch.Tensor:
+    """The peak loss of each panorama on its own: (B,) means over its own mask.
+
+    :func:`peak_loss` divides by the masked pixels of the whole batch; where each panorama is
+    optimised separately (a latent fit), its value must not depend on the other panoramas.
+    Arguments as :func:`peak_loss`.
+    """
+    err, mask = _masked_log_error(pred, target, fraction, eps)
+    return err.flatten(1).sum(1) / (3.0 * mask.flatten(1).sum(1))
