@@ -139,7 +139,9 @@ def test_evaluate_prior_report(setup):
     assert rep["rows"]["encoder"]["peak_stops"] == pytest.approx(float(peak_error_stops(pr, rad).mean()), rel=1e-5)
 
 
-def test_eval_prior_cli_writes_markdown_and_json(setup, tmp_path):
+@pytest.fixture
+def eval_cli(setup, tmp_path):
+    """(click group holding eval-prior, the toy folder, the saved model's folder)."""
     from roomlight.cli import eval_prior
     from roomlight.cli.common import RoomlightGroup
 
@@ -151,7 +153,12 @@ def test_eval_prior_cli_writes_markdown_and_json(setup, tmp_path):
         pass
 
     cli.add_command(eval_prior.command)
-    res = CliRunner().invoke(cli, ["eval-prior", "--model", str(tmp_path / "m"), "--data", str(root),
+    return cli, root, tmp_path / "m"
+
+
+def test_eval_prior_cli_writes_markdown_and_json(eval_cli, tmp_path):
+    cli, root, model_dir = eval_cli
+    res = CliRunner().invoke(cli, ["eval-prior", "--model", str(model_dir), "--data", str(root),
                                    "--fit-steps", "5", "--out", str(tmp_path / "rep")])
     assert res.exit_code == 0, res.output
     assert "| latent fit |" in res.output
@@ -160,12 +167,10 @@ def test_eval_prior_cli_writes_markdown_and_json(setup, tmp_path):
     assert (tmp_path / "rep" / "eval_prior.md").read_text().startswith("## Prior evaluation")
 
 
-def test_radiance_only_evaluation_of_panoramas_without_depth(setup, tmp_path):
+def test_radiance_only_evaluation_of_panoramas_without_depth(setup, eval_cli, tmp_path):
     """Real captures have no depth: --radiance-only fits z to radiance alone. On copies of the
     toy panoramas with the depth stripped (EXR and Radiance .hdr), it must give the same fit
     and the same radiance metrics as fitting radiance alone on the originals."""
-    from roomlight.cli import eval_prior
-    from roomlight.cli.common import RoomlightGroup
     from roomlight.io import read_panorama, write_exr, write_hdr
 
     root, ds, model = setup
@@ -197,14 +202,8 @@ def test_radiance_only_evaluation_of_panoramas_without_depth(setup, tmp_path):
         tol = 0.05 if rec["name"].endswith(".hdr") else 1e-4
         assert mine["psnr_hdr"] == pytest.approx(want["psnr_hdr"], rel=tol), rec["name"]
     # Without the flag, a folder without depth is refused in one line that names the fix.
-    model.save_pretrained(tmp_path / "m")
-
-    @click.group(cls=RoomlightGroup)
-    def cli():
-        pass
-
-    cli.add_command(eval_prior.command)
-    args = ["eval-prior", "--model", str(tmp_path / "m"), "--data", str(plain), "--fit-steps", "3",
+    cli, _, model_dir = eval_cli
+    args = ["eval-prior", "--model", str(model_dir), "--data", str(plain), "--fit-steps", "3",
             "--out", str(tmp_path / "rep")]
     res = CliRunner().invoke(cli, args)
     assert res.exit_code != 0 and "Traceback" not in res.output and "--radiance-only" in res.output
@@ -213,19 +212,9 @@ def test_radiance_only_evaluation_of_panoramas_without_depth(setup, tmp_path):
     assert "| latent fit (radiance) |" in res.output
 
 
-def test_eval_prior_names_the_latent_fit_objective(setup, tmp_path):
-    from roomlight.cli import eval_prior
-    from roomlight.cli.common import RoomlightGroup
-
-    root, _, model = setup
-    model.save_pretrained(tmp_path / "m")
-
-    @click.group(cls=RoomlightGroup)
-    def cli():
-        pass
-
-    cli.add_command(eval_prior.command)
-    args = ["eval-prior", "--model", str(tmp_path / "m"), "--data", str(root), "--fit-steps", "3", "--limit", "2"]
+def test_eval_prior_names_the_latent_fit_objective(eval_cli, tmp_path):
+    cli, root, model_dir = eval_cli
+    args = ["eval-prior", "--model", str(model_dir), "--data", str(root), "--fit-steps", "3", "--limit", "2"]
     res = CliRunner().invoke(cli, args + ["--out", str(tmp_path / "paper")])
     assert res.exit_code == 0, res.output
     assert "from z = 0; squared error of the normalised channels (the paper's protocol)" in res.output
