@@ -169,6 +169,18 @@ def test_bootstrap_interval_matches_the_normal_approximation():
     assert bootstrap_mean_interval(x) == (lo, hi)  # seeded
 
 
+def test_interval_verdict_reads_the_side_of_zero_by_hand():
+    from roomlight.stats import interval_verdict
+
+    assert interval_verdict(0.1, 0.5, 10, higher_is_better=True) == 1
+    assert interval_verdict(0.1, 0.5, 10, higher_is_better=False) == -1
+    assert interval_verdict(-0.5, -0.1, 10, higher_is_better=False) == 1
+    assert interval_verdict(-0.5, -0.1, 10, higher_is_better=True) == -1
+    assert interval_verdict(-0.1, 0.5, 10, higher_is_better=True) == 0
+    assert interval_verdict(0.0, 0.5, 10, higher_is_better=True) == 0  # touching zero decides nothing
+    assert interval_verdict(0.3, 0.3, 1, higher_is_better=True) == 0  # one item: a zero-width interval
+
+
 def test_report_without_results_fails_cleanly(tmp_path):
     from roomlight.bench.report import write_report
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["RESAMPLES", "bootstrap_mean_interval"]
+__all__ = ["RESAMPLES", "VERDICT_MARKS", "bootstrap_mean_interval", "interval_verdict"]
 
 #: Number of bootstrap resamples (the interval's Monte Carlo error is ~0.5 % of its width).
 RESAMPLES = 10000
@@ -32,3 +32,20 @@ def bootstrap_mean_interval(values, level: float = 0.95, resamples: int = RESAMP
     means = a[rng.integers(0, a.size, size=(resamples, a.size))].mean(axis=1)
     lo, hi = np.quantile(means, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
     return float(lo), float(hi)
+
+
+#: How tables mark a :func:`interval_verdict`.
+VERDICT_MARKS = {1: " ✓", -1: " ✗", 0: ""}
+
+
+def interval_verdict(lo: float, hi: float, n: int, higher_is_better: bool) -> int:
+    """Which side of zero a difference's interval [lo, hi] lies on, read as better or worse.
+
+    Returns 1 when the whole interval is on the good side (above zero when higher is better, below
+    when lower is), -1 when it is wholly on the bad side, 0 otherwise. One item gives a zero-width
+    interval that decides nothing, so ``n`` < 2 is always 0.
+    """
+    if n < 2:
+        return 0
+    good, bad = (lo > 0, hi < 0) if higher_is_better else (hi < 0, lo > 0)
+    return 1 if good else -1 if bad else 0

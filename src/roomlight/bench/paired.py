@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
-from roomlight.stats import RESAMPLES, bootstrap_mean_interval
+from roomlight.stats import RESAMPLES, VERDICT_MARKS, bootstrap_mean_interval, interval_verdict
 
 # bootstrap_mean_interval stays importable from here, where it was first defined.
 __all__ = ["bootstrap_mean_interval", "paired_differences", "paired_markdown"]
@@ -65,10 +65,7 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
 def _cell(s: dict, metric: str) -> str:
     digits = 2 if metric == "psnr_ldr" else 3
     lo, hi = s["ci95"]
-    # One scene gives a zero-width interval that decides nothing: no mark.
-    sure = s["n"] > 1 and ((lo > 0) if s["better"] == "higher" else (hi < 0))
-    worse = s["n"] > 1 and ((hi < 0) if s["better"] == "higher" else (lo > 0))
-    mark = " ✓" if sure else " ✗" if worse else ""
+    mark = VERDICT_MARKS[interval_verdict(lo, hi, s["n"], s["better"] == "higher")]
     return f"{s['mean']:+.{digits}f} [{lo:+.{digits}f}, {hi:+.{digits}f}] {s['wins']}/{s['n']}{mark}"
 
 

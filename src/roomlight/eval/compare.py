@@ -14,7 +14,7 @@ import math
 
 from roomlight.errors import RoomlightError
 from roomlight.eval.prior import METRICS
-from roomlight.stats import RESAMPLES, bootstrap_mean_interval
+from roomlight.stats import RESAMPLES, VERDICT_MARKS, bootstrap_mean_interval, interval_verdict
 
 __all__ = ["compare_reports", "comparison_markdown"]
 
@@ -79,9 +79,7 @@ def comparison_markdown(comparison: dict, base_label: str | None = None, other_l
     for key, s in comparison["metrics"].items():
         digits = 4 if key in ("ssim_ldr", "lpips_ldr", "abs_rel") else 2
         lo, hi = s["ci95"]
-        good = (lo > 0) if s["better"] == "higher" else (hi < 0)
-        bad = (hi < 0) if s["better"] == "higher" else (lo > 0)
-        mark = " ✓" if good else (" ✗" if bad else "")
+        mark = VERDICT_MARKS[interval_verdict(lo, hi, s["n"], s["better"] == "higher")]
         base = f"{s['base']:.{digits}f} [{s['base_ci95'][0]:.{digits}f}, {s['base_ci95'][1]:.{digits}f}]"
         other = f"{s['other']:.{digits}f} [{s['other_ci95'][0]:.{digits}f}, {s['other_ci95'][1]:.{digits}f}]"
         lines.append(f"| {METRICS[key][0]} | {base} | {other} | "
