@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 from roomlight.errors import RoomlightError
-from roomlight.eval.prior import METRICS
+from roomlight.eval.prior import METRICS, metric_digits
 from roomlight.stats import RESAMPLES, VERDICT_MARKS, bootstrap_mean_interval, interval_verdict
 
 __all__ = ["compare_reports", "comparison_markdown"]
@@ -26,6 +26,11 @@ def _values(report: dict, row: str, what: str) -> dict[str, dict]:
         rows = sorted({k for rec in report.get("per_image", []) for k in rec if k != "name"})
         raise RoomlightError(f"{what}: no per-image values for row {row!r} (rows: {', '.join(rows) or 'none'})")
     return out
+
+
+def _finite(value) -> bool:
+    """A metric value that can enter a mean (JSON reports write NaN and inf as null)."""
+    return value is not None and math.isfinite(value)
 
 
 def compare_reports(base: dict, other: dict, base_row: str = "latent fit", other_row: str | None = None) -> dict:
@@ -51,9 +56,7 @@ def compare_reports(base: dict, other: dict, base_row: str = "latent fit", other
         raise RoomlightError("the two reports share no panorama (they are paired by file name)")
     metrics = {}
     for key, (_, higher) in METRICS.items():
-        pairs = [(a[n][key], b[n][key]) for n in names if key in a[n] and key in b[n]
-                 and a[n][key] is not None and b[n][key] is not None
-                 and math.isfinite(a[n][key]) and math.isfinite(b[n][key])]
+        pairs = [(a[n][key], b[n][key]) for n in names if _finite(a[n].get(key)) and _finite(b[n].get(key))]
         if not pairs:
             continue
         diffs = [y - x for x, y in pairs]
@@ -77,7 +80,7 @@ def comparison_markdown(comparison: dict, base_label: str | None = None, other_l
              f"| metric | {base_label} | {other_label} | difference [95 % interval] | {other_label} better |",
              "|---|---:|---:|---|---:|"]
     for key, s in comparison["metrics"].items():
-        digits = 4 if key in ("ssim_ldr", "lpips_ldr", "abs_rel") else 2
+        digits = metric_digits(key)
         lo, hi = s["ci95"]
         mark = VERDICT_MARKS[interval_verdict(lo, hi, s["n"], s["better"] == "higher")]
         base = f"{s['base']:.{digits}f} [{s['base_ci95'][0]:.{digits}f}, {s['base_ci95'][1]:.{digits}f}]"

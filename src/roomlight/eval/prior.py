@@ -26,7 +26,7 @@ from roomlight.color import to_display_at_key
 from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim
 from roomlight.fit.latent import LatentFitConfig, fit_latent
 
-__all__ = ["METRICS", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
+__all__ = ["METRICS", "metric_digits", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
 
 #: Metric name -> (column title, higher is better).
 METRICS = {
@@ -37,6 +37,11 @@ METRICS = {
     "peak_stops": ("Peak error (stops) ↓", False),
     "abs_rel": ("AbsRel depth ↓", False),
 }
+
+
+def metric_digits(name: str) -> int:
+    """Decimals a table shows for metric ``name``: 4 for the small ratios (SSIM, LPIPS, AbsRel), else 2."""
+    return 4 if name in ("ssim_ldr", "lpips_ldr", "abs_rel") else 2
 
 
 def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) -> dict[str, torch.Tensor]:
@@ -95,14 +100,15 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
                                  "the encoder needs depth")
         if fit_config.init_from_encoder:
             raise RoomlightError("radiance-only evaluation fits from z = 0: the encoder needs depth")
-        rows = {"latent fit (radiance)": fit_config.override(target="radiance", depth_weight=1.0)}
+        rows = {"latent fit (radiance)": fit_config.override(target="radiance")}
     else:
         rows = {"encoder": None}
         if fit_config is not None:
             rows["latent fit"] = fit_config
             if depth_only_fit:
-                # Depth alone: no radiance, so no peak term, no channel to weigh depth against and no
-                # encoder start (the encoder reads radiance): the supplementary's check, from z = 0.
+                # Depth alone: no radiance, so no peak term and no encoder start (the encoder reads
+                # radiance): the supplementary's check, from z = 0. The lone channel gets weight 1, which
+                # is what any positive weight gives it, and keeps a --depth-weight 0 from emptying it.
                 rows["latent fit (depth only)"] = fit_config.override(target="depth", peak_weight=0.0,
                                                                       depth_weight=1.0, init_from_encoder=False)
     per_image, skipped = [], []
@@ -175,8 +181,7 @@ def report_markdown(report: dict, title: str = "Prior evaluation") -> str:
     lines.append("| | " + " | ".join(METRICS[k][0] for k in cols) + " |")
     lines.append("|---|" + "---:|" * len(cols))
     for row, vals in report["rows"].items():
-        cells = [f"{vals[k]:.4f}" if k in ("ssim_ldr", "lpips_ldr", "abs_rel") else f"{vals[k]:.2f}"
-                 for k in cols if k in vals]
+        cells = [f"{vals[k]:.{metric_digits(k)}f}" for k in cols if k in vals]
         lines.append(f"| {row} | " + " | ".join(cells) + " |")
     lines.append("")
     if report.get("lpips"):

@@ -82,15 +82,15 @@ class LatentFitConfig(StrictConfig):
         if self.peak_weight > 0:
             objective += (f", + {self.peak_weight:g} × log-L1 over the brightest "
                           f"{100 * self.peak_fraction:g} % of pixels")
-        if self.is_paper_protocol and not self.init_from_encoder:
+        if self.is_paper_protocol:
             objective += " (the paper's protocol)"
         return (f"Adam, {self.steps} steps, lr {self.lr:g} → {self.lr_final:g} (exponential), from {start}; "
                 f"{objective}")
 
     @property
     def is_paper_protocol(self) -> bool:
-        """True when the objective is the paper's plain squared error of the normalised channels."""
-        return self.depth_weight == 1.0 and self.peak_weight == 0.0
+        """True for the paper's start and objective: z = 0, plain squared error of the normalised channels."""
+        return not self.init_from_encoder and self.depth_weight == 1.0 and self.peak_weight == 0.0
 
 
 @dataclass
@@ -165,8 +165,8 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
     weights = _channel_weights(config, channels, device).view(1, -1)  # (1, C)
     with torch.no_grad():
         x = norm.normalize(rad.float(), dep.float())[:, channels]
-        # The peak term compares linear radiance as the decoder produces it (clamped like
-        # denormalize), so the target gets the same clamp.
+        # Decoded radiance is never negative (denormalize clamps it), so the target's negative
+        # values are clamped too before the peak term ranks its brightest pixels.
         rad_target = rad.float().clamp_min(0.0) if config.peak_weight > 0 else None
     was_training = model.training
     # Freeze the decoder for the fit, and give every parameter back the flag it had: a model
