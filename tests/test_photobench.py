@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 from click.testing import CliRunner
 
 from roomlight.errors import RoomlightError
@@ -590,3 +591,50 @@ def test_builds_are_deterministic_and_a_degraded_variant_differs_only_in_depth(b
         assert ra[k] == rb[k], k
     other = make_photo_benchmark(tmp_path / "seed1", TINY.override(seed=1), progress=False)
     assert other["photos"][0]["room_seed"] != ra["room_seed"]
+
+
+@pytest.mark.mitsuba
+def test_prior_ceiling_and_start_rows_split_the_gap(built, tmp_path, monkeypatch):
+    from roomlight.model import Normalization, PanoVAE
+    from roomlight.model.config import get_preset
+    from roomlight.photobench import adapter, ceiling
+    from roomlight.photobench.report import write_photo_report
+    from roomlight.photobench.runner import run_photo_benchmark
+
+    torch.manual_seed(0)
+    prior = PanoVAE(get_preset("tiny"), Normalization((0.5, 0.5, 0.5, 0.7), (0.6, 0.6, 0.6, 0.5))).eval()
+    monkeypatch.setattr(ceiling, "CEILING_FIT", {"steps": 20, "init_from_encoder": True, "depth_weight": 3.0})
+    calls = []
+    stand_in = _stand_in_fit(calls)
+
+    def fit(case_dir, method, preset, out_dir, model=None, progress=False, overrides=None):
+        return stand_in(case_dir, "prior" if method.startswith("prior") else method, preset, out_dir)
+
+    res = tmp_path / "res"
+    methods = ("prior-samples", "prior", "prior-ceiling", "oracle")
+    summary = run_photo_benchmark(built, res, methods, preset="fast", model=prior, eval_spp=8, fit=fit,
+                                  progress=False)
+    assert not summary.failed, summary.failed
+    ceil = json.loads((res / "cases/photo-00000/prior-ceiling/result.json").read_text())
+    assert ceil["emitter_kind"] == "mesh" and ceil["recovered_resolution"] == [16, 32] and ceil["materials"] is None
+    assert "fit" not in ceil["files"]                        # a reference: nothing fitted from the photo
+    md = write_photo_report(res, figures=False, progress=False)["markdown"].read_text()
+    assert "**prior-ceiling − oracle**" in md and "**prior-samples − prior-ceiling**" in md
+    gap = json.loads((res / "report" / "summary.json").read_text())["gap_steps"]
+    step = next(g for g in gap if g["method"] == "prior-ceiling")
+    assert set(step["paired"]) == {"oracle"}                 # each step pairs exactly its two rows
+    assert "prior-ceiling" not in json.loads((res / "report" / "summary.json").read_text())["paired"]["probes"]
+
+    # the start variants are fit-photo's prior with --init fixed
+    seen = {}
+
+    def fake_fit_photo(case, method, config, model=None, out_dir=None, progress=False):
+        seen.update(method=method, init=config.init)
+        raise RuntimeError("stop here")
+
+    from roomlight.photo import fitter as fitter_mod
+
+    monkeypatch.setattr(fitter_mod, "fit_photo", fake_fit_photo)
+    with pytest.raises(RuntimeError, match="stop here"):
+        adapter.fit_photo_case(_case(built), "prior-zero", "fast", tmp_path / "f")
+    assert seen == {"method": "prior", "init": "zero"}

@@ -49,12 +49,19 @@ _FAST = PHOTO_PRESETS["fast"]
 @click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
 @click.option("--spp", type=int, default=None, help="Override: samples per pixel per step.")
 @click.option("--seed", type=int, default=None, help=f"Override: base seed {default_of(PhotoFitConfig, 'seed')}.")
+@click.option("--init", "init", type=click.Choice(["auto", "view", "samples", "zero"]), default=None,
+              help="Start of the prior's latent: view (the prior's view encoder reads the photograph), samples "
+                   "(the paper's: the largest of init_samples random rooms), zero (the mean room). "
+                   "[default: auto = view when the prior has a view encoder, else samples]")
+@click.option("--view-encoder", "view_encoder", type=click.Path(exists=True, file_okay=False), default=None,
+              help="Use this view encoder (a folder written by train-view-encoder, e.g. RUN/best) "
+                   "instead of the one beside the prior.")
 @click.option("--restart", is_flag=True, help="Start over instead of resuming an interrupted fit found in --out.")
 @click.option("--set", "sets", multiple=True, metavar="FIELD=VALUE",
               help="Override any photo fit setting (docs/photo.md), e.g. --set render_size=320 (repeatable).")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, pitch, roll, estimator, method, compare,
-            model, preset, iterations, spp, seed, restart, sets, quiet):
+            model, preset, iterations, spp, seed, init, view_encoder, restart, sets, quiet):
     """Recover the room's light, and the objects' materials, from the photograph IMAGE.
 
     IMAGE is an 8-bit PNG/JPEG (sRGB) or a linear EXR, or a photo case folder (image, depth,
@@ -75,7 +82,7 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     from roomlight.photo.config import photo_config
     from roomlight.photo.pipeline import run_photo
 
-    cfg = photo_config(preset, iterations=iterations, spp=spp, seed=seed, **parse_sets(sets))
+    cfg = photo_config(preset, iterations=iterations, spp=spp, seed=seed, init=init, **parse_sets(sets))
     case = load_photo(image, depth=depth, depth_kind=depth_kind, mask=mask, normals=normals, fov=fov,
                       intrinsics=intrinsics, pitch=pitch, roll=roll, estimator=estimator,
                       min_object_fraction=cfg.min_object_fraction)
@@ -84,6 +91,10 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     prior = None
     if any(m.startswith("prior") for m in (method, *compare)):
         prior, _ = load_prior(model, f"--method {method}")
+        if view_encoder is not None:
+            from roomlight.viewenc import ViewEncoder
+
+            prior.set_view_encoder(ViewEncoder.from_pretrained(view_encoder, prior.config))
     click.echo(f"{case.files['image']}: {case.width}x{case.height}, {len(case.objects.ids)} object(s), "
                f"{case.depth_kind} depth from {case.files['depth']}", err=True)
     run_photo(case, method, cfg, out_dir, model=prior, compare=compare, progress=not quiet, resume=not restart,

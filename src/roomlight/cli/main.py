@@ -31,6 +31,7 @@ def cli(threads):
       roomlight synth --n N --out DIR       render a dataset of procedural rooms
       roomlight prepare IN --out DIR       real captures -> training data (nadir, depth)
       roomlight train --data DIR --out RUN     train the prior on panoramas
+      roomlight train-view-encoder --data DIR --out RUN   the photo fit's start, for a prior
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
       roomlight fit-photo IMAGE --out DIR   light + materials from one photograph
@@ -44,9 +45,9 @@ def cli(threads):
 
 def _register():
     from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, experiment, export, fit, fit_pano,
-                               fit_photo, info, prepare, render, sample, synth, train, view)
+                               fit_photo, info, prepare, render, sample, synth, train, train_view_encoder, view)
 
-    for mod in (info, emitter, render, synth, prepare, data, train, fit_pano, eval_prior, sample, convert, fit,
+    for mod in (info, emitter, render, synth, prepare, data, train, train_view_encoder, fit_pano, eval_prior, sample, convert, fit,
                 fit_photo, bench, demo, view, export, experiment):
         cli.add_command(mod.command)
 

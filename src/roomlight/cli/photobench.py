@@ -81,7 +81,9 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, depth_noise,
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
 @click.option("--methods", default=None,
               help=f"Comma-separated methods [default: {','.join(DEFAULT_METHODS)}]; also oracle and oracle-envmap "
-                   "(the photo's room captured at the probes, as a 2.5D light or at infinity: references).")
+                   "(the photo's room captured at the probes, as a 2.5D light or at infinity: references), "
+                   "prior-ceiling (the prior's latent fitted to that room: the prior's own ceiling), and "
+                   "prior-view, prior-samples, prior-zero (the prior's fit from a fixed start, as fit-photo --init).")
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior for the prior methods [default: the prior bundled with roomlight].")
 @click.option("--preset", default="paper", show_default=True,

@@ -6,7 +6,8 @@ regularisers. The fitting loop (:mod:`roomlight.inverse.fitter`) does not know w
 
 - :class:`PriorLight`: z in R^latent (init 0) and log-exposure s (init log 0.18), decoded by
   a frozen PanoVAE decoder; shown as the 2.5D area light (``prior``) or at infinity
-  (``prior-envmap``). Optionally a Gaussian prior on z and a fitted global depth scale.
+  (``prior-envmap``). Optionally a Gaussian prior on z, a fitted global depth scale and a floor
+  under the depth that keeps given points inside the light.
 - :class:`DirectLight`: free log-radiance (and, for the 2.5D light, log-depth) maps at
   128 x 256 with the smoothness prior (the paper's "Smoothness" baselines).
 """
@@ -17,6 +18,7 @@ import math
 
 import torch
 
+from roomlight.inverse.floor import apply_floor
 from roomlight.inverse.smoothness import smoothness
 
 __all__ = ["LightModel", "PriorLight", "DirectLight"]
@@ -70,6 +72,9 @@ class PriorLight(LightModel):
         self.s = torch.nn.Parameter(torch.tensor(math.log(init_exposure)))
         self.log_depth_scale = torch.nn.Parameter(torch.zeros(())) if fit_depth_scale else None
         self.z_prior = z_prior
+        #: (H, W) floor under the decoded depth (:mod:`roomlight.inverse.floor`), or None. A plain
+        #: attribute, not a buffer: it belongs to the fit's scene, not to the light's state.
+        self.depth_floor: torch.Tensor | None = None
 
     @property
     def resolution(self) -> tuple[int, int]:
@@ -83,7 +88,7 @@ class PriorLight(LightModel):
         d = depth[0, 0]
         if self.log_depth_scale is not None:
             d = d * torch.exp(self.log_depth_scale)
-        return rad, d
+        return rad, apply_floor(d, self.depth_floor)
 
     def regularizers(self):
         if self.z_prior > 0:

@@ -186,6 +186,20 @@ class PanoVAE(nn.Module):
         self.metadata = {"depth_units": "metres", **(metadata or {})}
         self.encoder = Encoder(self.config)
         self.decoder = Decoder(self.config)
+        # Held in a tuple so that it is not a sub-module: the prior's state_dict, checksum and
+        # device stay its own (the view encoder always runs on the CPU).
+        self._view_encoder: tuple = ()
+
+    @property
+    def view_encoder(self):
+        """The :class:`~roomlight.viewenc.ViewEncoder` trained for this prior, or None."""
+        return self._view_encoder[0] if self._view_encoder else None
+
+    def set_view_encoder(self, encoder) -> None:
+        """Attach a view encoder (None detaches); it must share this prior's architecture."""
+        if encoder is not None and encoder.config != self.config:
+            raise RoomlightError("set_view_encoder: the view encoder was made for another prior architecture")
+        self._view_encoder = () if encoder is None else (encoder.to("cpu").eval(),)
 
     # ------------------------------------------------------------------ normalised domain
     def _check_input(self, x: torch.Tensor, channels: int, what: str) -> None:
@@ -301,7 +315,8 @@ class PanoVAE(nn.Module):
         ``path`` may be the checkpoint directory or a file inside it (``config.json``,
         ``model.safetensors``, ``config.yaml``, ``last_epoch.pth``). The authors' format is
         recognised by ``config.yaml`` + a ``.pth`` file; it is a third-party pickle and is loaded
-        with ``weights_only=True`` (a warning says so). Returns the model in eval mode.
+        with ``weights_only=True`` (a warning says so). A ``view_encoder/`` folder beside the
+        weights, trained for them, is loaded as :attr:`view_encoder`. Returns the model in eval mode.
         """
         path = Path(path)
         if not path.exists():
@@ -309,6 +324,9 @@ class PanoVAE(nn.Module):
         directory = path if path.is_dir() else path.parent
         if (directory / CONFIG_NAME).exists() and (directory / WEIGHTS_NAME).exists():
             model = cls._load_roomlight(directory)
+            from roomlight.viewenc.network import load_view_encoder_beside
+
+            model.set_view_encoder(load_view_encoder_beside(directory, model.config))
         elif (directory / "config.yaml").exists() or path.suffix == ".pth":
             from roomlight.model.convert import load_authors_run
 

@@ -10,8 +10,8 @@ resumable state). A photograph changes four things:
   points include free space in the view frustum, so the emitter never hides the scene;
 - each step of the latent z is clipped to a norm of ``latent_step_clip`` (instead of clipping the
   gradient's norm);
-- the start: a large room from N(0, I), the scene placed inside it, a matching exposure
-  (:mod:`roomlight.photo.placement`).
+- the start: the view encoder's room or a large room from N(0, I) (:mod:`roomlight.photo.start`),
+  the scene placed inside it, a matching exposure (:mod:`roomlight.photo.placement`).
 """
 
 from __future__ import annotations
@@ -128,6 +128,8 @@ class PhotoFit:
         objective: every term of the objective at the best iterate (fixed seed).
         timings: seconds per phase.
         initial: how the fit started (latent draws, exposure, placement).
+        containment: for a 2.5D light, how many free-space and object points it had to enclose,
+            whether the depth floor held them, and the share of each left outside (0 with the floor).
     """
 
     method: str
@@ -139,6 +141,7 @@ class PhotoFit:
     objective: dict
     timings: dict = field(default_factory=dict)
     initial: dict = field(default_factory=dict)
+    containment: dict = field(default_factory=dict)
 
     @property
     def materials(self) -> ObjectMaterials:
@@ -147,14 +150,15 @@ class PhotoFit:
 
 def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig, model, case) -> tuple:
     """(light model, scene transform, description of the start) of ``method``."""
-    from roomlight.photo.placement import initial_latent, matching_log_exposure, place_scene
+    from roomlight.photo.placement import matching_log_exposure, place_scene
+    from roomlight.photo.start import start_latent
 
     base = level_transform(case)
     obs_room_dirs = base.directions(geometry.frustum.rays)
     if method in ("prior", "prior-envmap"):
         if model is None:
             raise RoomlightError(f"method {method!r} needs a trained prior (--model)")
-        z0, medians = initial_latent(model, config.init_samples, config.seed)
+        z0, start = start_latent(config.init, model, case, config)
         light = PriorLight(model, envmap=method == "prior-envmap", init_exposure=1.0, z_prior=config.z_prior)
         with torch.no_grad():
             light.z.copy_(z0.to(light.z.device))
@@ -170,8 +174,7 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
         s0 = matching_log_exposure(rad, dirs, geometry.frustum.radiance, config.tau)
         with torch.no_grad():
             light.s.fill_(s0)
-        info = {"latent_draws": len(medians), "median_depths": [round(m, 4) for m in medians],
-                "z_norm": float(z0.norm()), "exposure": math.exp(s0)}
+        info = {**start, "z_norm": float(z0.norm()), "exposure": math.exp(s0)}
         return light, transform, info
     if method == "direct-envmap":
         from roomlight.color import log_average_np
@@ -232,6 +235,13 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
         transform = level_transform(case)
     timings["initialisation"] = time.perf_counter() - t0
 
+    contained = _containment_points(geometry, transform, config) if light.kind == "mesh" else None
+    if contained is not None and config.contain and hasattr(light, "depth_floor"):
+        from roomlight.inverse.floor import depth_floor
+
+        light.depth_floor = depth_floor(torch.from_numpy(np.concatenate(contained[:2])), light.resolution,
+                                        torch.from_numpy(contained[2]))
+
     if materials is None:
         materials = ObjectMaterials(geometry.labels_present)
     photo_model = PhotoModel(light, materials)
@@ -262,4 +272,24 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     t0 = time.perf_counter()
     objective = fitter.evaluate_terms()
     timings["final_evaluation"] = time.perf_counter() - t0
-    return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info)
+    if contained is not None and result.depth is not None:
+        from roomlight.inverse.floor import outside_share
+
+        containment = {
+            "floor": bool(config.contain and getattr(light, "depth_floor", None) is not None),
+            "free_space_points": len(contained[0]), "object_points": len(contained[1]),
+            "free_space_outside_share": outside_share(result.depth, torch.from_numpy(contained[0])),
+            "objects_outside_share": outside_share(result.depth, torch.from_numpy(contained[1]))}
+    else:
+        containment = {}
+    return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info, containment)
+
+
+def _containment_points(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig):
+    """(free-space points, object points, per-point margin) in the room frame that a 2.5D light must
+    enclose: every pixel's free space up to ``free_space_fraction`` of its distance, and every object
+    vertex with ``margin`` to spare."""
+    free, objects = geometry.contained_points(config.free_space_fraction)
+    free, objects = transform.points(free), transform.points(objects)
+    margin = np.concatenate([np.zeros(len(free)), np.full(len(objects), float(config.margin))])
+    return free, objects, margin

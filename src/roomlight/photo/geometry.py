@@ -99,6 +99,7 @@ class PhotoGeometry:
         frustum: observations of the room outside the objects (render resolution).
         free_points: (M, 3) points of the empty space between the camera and what it sees.
         object_points: (K, 3) points on the objects' surfaces.
+        pixel_points: (Hr * Wr, 3) the point every render pixel sees (objects and room).
     """
 
     intrinsics: Intrinsics
@@ -110,10 +111,19 @@ class PhotoGeometry:
     frustum: FrustumSamples
     free_points: np.ndarray
     object_points: np.ndarray
+    pixel_points: np.ndarray | None = None
 
     @property
     def labels_present(self) -> list[int]:
         return [o.label for o in self.objects]
+
+    def contained_points(self, free_space_fraction: float) -> tuple[np.ndarray, np.ndarray]:
+        """What a 2.5D light must enclose (camera frame): (free-space points (N, 3): each pixel's point
+        at ``free_space_fraction`` of its distance, the farthest free space the pixel vouches for;
+        object points (K, 3): every vertex of every object's mesh)."""
+        free = self.pixel_points * free_space_fraction
+        objects = np.concatenate([o.vertices for o in self.objects]) if self.objects else np.zeros((0, 3))
+        return free, objects
 
 
 def working_size(height: int, width: int, longest: int) -> tuple[int, int]:
@@ -206,7 +216,9 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
     # (t > 0: a point exactly at the camera centre has no direction to look the emitter up in)
     t = np.maximum(t, 1e-3)
     free = pts_r.reshape(-1, 3)[pix] * t[:, None]
-    return PhotoGeometry(k_ren, target, labels_r, loss_mask, mesh, objects, frustum, free, np.concatenate(obj_pts))
+    return PhotoGeometry(k_ren, target, labels_r, loss_mask, mesh, objects, frustum, free, np.concatenate(obj_pts),
+                         pts_r.reshape(-1, 3))
+
 
 
 def level_transform(case) -> SceneTransform:

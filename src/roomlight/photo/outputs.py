@@ -141,6 +141,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
                    "depth_kind": case.depth_kind, "pitch_deg": case.pitch_deg, "roll_deg": case.roll_deg},
         "transform": fit.transform.to_dict(),
         "initial": fit.initial,
+        "containment": fit.containment,
         "inputs": case.files,
         "settings": config.to_dict(),
         "timings": timings,

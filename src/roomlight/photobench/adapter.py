@@ -18,10 +18,15 @@ import numpy as np
 
 from roomlight.errors import RoomlightError
 
-__all__ = ["PHOTO_FIT_METHODS", "fit_photo_case"]
+__all__ = ["FIT_PHOTO_METHODS", "START_VARIANTS", "PHOTO_FIT_METHODS", "fit_photo_case"]
 
 #: The methods of ``roomlight fit-photo``.
-PHOTO_FIT_METHODS = ("prior", "prior-envmap", "direct-envmap")
+FIT_PHOTO_METHODS = ("prior", "prior-envmap", "direct-envmap")
+#: ``prior`` with a fixed start (``fit-photo --init``): the rows that split the photo fit's gap.
+#: (``prior`` itself starts as fit-photo does by default: from the view encoder when the prior has one.)
+START_VARIANTS = {"prior-view": "view", "prior-samples": "samples", "prior-zero": "zero"}
+#: Every method name the benchmark can fit.
+PHOTO_FIT_METHODS = FIT_PHOTO_METHODS + tuple(START_VARIANTS)
 
 
 def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, progress: bool = False,
@@ -49,7 +54,10 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
     if method not in PHOTO_FIT_METHODS:
         raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_FIT_METHODS)}")
     t0 = time.perf_counter()
-    config = config_mod.photo_config(preset, **(overrides or {}))
+    overrides = dict(overrides or {})
+    if method in START_VARIANTS:
+        method, overrides["init"] = "prior", START_VARIANTS[method]
+    config = config_mod.photo_config(preset, **overrides)
     case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
     out = Path(out_dir)
     fit = fitter_mod.fit_photo(case, method, config, model=model, out_dir=out, progress=progress)

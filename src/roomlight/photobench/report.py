@@ -31,17 +31,25 @@ from roomlight.bench.report import collect_failures
 from roomlight.bench.tables import markdown_table, ordered, summarize, write_wide_csv
 from roomlight.errors import RoomlightError
 from roomlight.photobench.objects import PROBE_MATERIALS
-from roomlight.photobench.runner import ORACLES, RESULT
+from roomlight.photobench.runner import ORACLES, REFERENCES, RESULT
 from roomlight.photobench.scoring import MATERIAL_METRICS
 
 __all__ = ["collect_photo_results", "probe_records", "material_records", "materials_table", "write_photo_report",
            "PHOTO_METHOD_ORDER"]
 
 #: Row order: the baselines, the prior, then the references.
-PHOTO_METHOD_ORDER = ("direct-envmap", "prior-envmap", "prior", "oracle-envmap", "oracle")
+PHOTO_METHOD_ORDER = ("direct-envmap", "prior-envmap", "prior-samples", "prior-zero", "prior-view", "prior",
+                      "prior-ceiling", "oracle-envmap", "oracle")
+#: The steps from the oracle light down to the photo fit: (method, the reference it is compared with).
+GAP_STEPS = (("prior-ceiling", "oracle", "the prior's capacity: its best latent for the whole room vs the room"),
+             ("prior-samples", "prior-ceiling", "the fit from the paper's start vs the prior's ceiling"),
+             ("prior-zero", "prior-ceiling", "the fit from z = 0 vs the prior's ceiling"),
+             ("prior-view", "prior-ceiling", "the fit from the view encoder's start vs the prior's ceiling"),
+             ("prior", "prior-ceiling", "the default fit vs the prior's ceiling"),
+             ("prior-view", "prior-samples", "the view encoder's start vs the paper's start"))
 MATERIAL_LABELS = {"albedo_rmse": "albedo RMSE ↓", "roughness_error": "roughness error ↓",
                    "metallic_error": "metallic error ↓"}
-_EXCLUDE = tuple(ORACLES)
+_EXCLUDE = REFERENCES
 _LOWER = {m: False for m in MATERIAL_METRICS}
 _STYLE = ("body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1400px;padding:0 1em;line-height:1.45}"
           "table{border-collapse:collapse;font-size:13px;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 6px;"
@@ -138,7 +146,32 @@ def _materials_csv(path: Path, records: list[dict]) -> None:
             w.writerow(row + [len(by[m])])
 
 
-def _markdown(results, probes, mats, paired, paired_mat, timing, failures) -> str:
+def gap_steps(probes: list[dict]) -> list[dict]:
+    """The paired differences of each step of :data:`GAP_STEPS` whose two methods were both run:
+    ``[{"method", "reference", "what", "paired"}]`` (``paired`` as :func:`paired_differences` gives it)."""
+    present = {r["method"] for r in probes}
+    out = []
+    for method, reference, what in GAP_STEPS:
+        if method in present and reference in present:
+            others = tuple(present - {method, reference})
+            out.append({"method": method, "reference": reference, "what": what,
+                        "paired": paired_differences(probes, method, "eval", exclude=others)})
+    return out
+
+
+def _gap_markdown(gap: list[dict], materials) -> list[str]:
+    if not gap:
+        return []
+    md = ["## Where the gap is: each step from the oracle light to the photo fit", "",
+          "Rows pair each photo's probes under two lights; the oracle is the room itself, the prior's ceiling "
+          "its best approximation by the prior given the whole room.", ""]
+    for step in gap:
+        md += [f"**{step['method']} − {step['reference']}**: {step['what']}.", "",
+               paired_markdown(step["paired"], step["method"], materials)]
+    return md
+
+
+def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=()) -> str:
     photos = len({r["photo"] for r in results})
     md = ["# Photo benchmark results", "",
           f"{len(results)} cases, {photos} photos. Cells: mean ± std over photos (one photo: its value alone); "
@@ -146,6 +179,7 @@ def _markdown(results, probes, mats, paired, paired_mat, timing, failures) -> st
           "## Probes at the true positions under each recovered light", "", markdown_table(probes, "eval"),
           "## Paired differences on the probes: the prior against each baseline", "",
           paired_markdown(paired, "prior", [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
+          *_gap_markdown(list(gap), [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
           "## Recovered materials (mean error over each photo's objects)", "", materials_table(mats),
           "## Paired differences on the materials", "",
           paired_markdown(paired_mat, "prior", ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()}),
@@ -268,6 +302,7 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
     paired = paired_differences(probes, "prior", "eval", exclude=_EXCLUDE)
     paired_mat = paired_differences(mats, "prior", "materials", exclude=_EXCLUDE, metrics=MATERIAL_METRICS,
                                     higher_is_better=_LOWER)
+    gap = gap_steps(probes)
     timing = _timing(results)
     paths = {"markdown": out / "report.md", "csv": out / "table.csv", "materials": out / "materials.csv",
              "cases": out / "cases.csv", "json": out / "summary.json"}
@@ -283,11 +318,11 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
                "materials": {m: {k: {"mean": float(np.mean([v[k] for v in vals])),
                                      "std": float(np.std([v[k] for v in vals])), "n": len(vals)}
                                  for k in MATERIAL_METRICS} for m, vals in mat_summary.items()},
-               "paired": {"probes": paired, "materials": paired_mat}, "timing": timing,
+               "paired": {"probes": paired, "materials": paired_mat}, "gap_steps": gap, "timing": timing,
                "failed": [f.get("case", "?") for f in failures], "settings": settings,
                "std": "population standard deviation over photos (ddof = 0)"}
     paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
-    paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures))
+    paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures, gap))
     figs: dict[str, Path] = {}
     if figures:
         by: dict[str, list[dict]] = {}

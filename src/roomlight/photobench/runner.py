@@ -5,6 +5,8 @@ For each case (photo x method), in manifest order:
 1. the method fits the photo case (:func:`roomlight.photobench.adapter.fit_photo_case`, the
    fit-photo pipeline; its files go to ``CASE/fit``); the pseudo-methods ``oracle`` and
    ``oracle-envmap`` fit nothing and take the photo's oracle light as a 2.5D light or an env map;
+   ``prior-ceiling`` takes the prior's latent fitted to that oracle panorama (the prior's ceiling);
+   ``prior-view``, ``prior-samples`` and ``prior-zero`` are ``prior`` from a fixed start (``--init``);
 2. the probes are rendered at their true positions under the recovered light and scored against
    the ground truth (:mod:`roomlight.photobench.scoring`), and the recovered materials against
    the true ones.
@@ -33,18 +35,22 @@ import numpy as np
 
 from roomlight.bench.runner import RunSummary, check_run_file, record_failure, write_json
 from roomlight.errors import RoomlightError
-from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
+from roomlight.photobench.adapter import FIT_PHOTO_METHODS, PHOTO_FIT_METHODS, fit_photo_case
+from roomlight.photobench.ceiling import CEILING, prior_ceiling_light
 from roomlight.photobench.builder import read_photo_manifest
 from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_truth, material_errors, oracle_light,
                                           score_light)
 
-__all__ = ["ORACLES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE", "PhotoCase",
+__all__ = ["ORACLES", "REFERENCES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE", "PhotoCase",
            "list_photo_cases", "run_photo_case", "run_photo_benchmark"]
 
 #: Pseudo-methods: the photo's oracle light as a 2.5D light, or shown at infinity.
 ORACLES = {"oracle": "mesh", "oracle-envmap": "envmap"}
-KNOWN_METHODS = PHOTO_FIT_METHODS + tuple(ORACLES)
-DEFAULT_METHODS = PHOTO_FIT_METHODS
+#: References that fit nothing from the photograph: the oracles and the prior's ceiling
+#: (:mod:`roomlight.photobench.ceiling`). Their lights live in the oracle's frame.
+REFERENCES = tuple(ORACLES) + (CEILING,)
+KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
+DEFAULT_METHODS = FIT_PHOTO_METHODS
 #: Samples per pixel of the scoring renders.
 DEFAULT_EVAL_SPP = 256
 RESULT = "result.json"
@@ -100,6 +106,9 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
     if case.method in ORACLES:
         light = oracle_light(case.case_dir, ORACLES[case.method], truth)
         fit_seconds = 0.0
+    elif case.method == CEILING:
+        light = prior_ceiling_light(case.case_dir, model, truth)
+        fit_seconds = time.perf_counter() - t0
     else:
         out = fit(case.case_dir, case.method, preset, cdir / "fit", model=model, progress=progress,
                   overrides=overrides)
@@ -111,7 +120,7 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
                    metadata={"emitter_kind": light.kind, "light_from_camera": np.asarray(light.light_from_camera).tolist()})
     t1 = time.perf_counter()
     renders: dict = {}
-    scores = score_light(truth, light, eval_spp, renders=renders, given_depth=case.method not in ORACLES)
+    scores = score_light(truth, light, eval_spp, renders=renders, given_depth=case.method not in REFERENCES)
     for m, img in renders.items():
         write_rgb_exr(cdir / f"probes_{m}.exr", img)
     record = {"photo": case.photo, "case_dir": str(Path(case.case_dir).resolve()), "method": case.method,
@@ -120,7 +129,7 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
               "eval_seconds": time.perf_counter() - t1, "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH,
               "recovered_resolution": list(light.radiance.shape[:2]),
               "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
-                        **({"fit": "fit"} if case.method not in ORACLES else {})}}
+                        **({"fit": "fit"} if case.method not in REFERENCES else {})}}
     (cdir / "error.json").unlink(missing_ok=True)
     write_json(cdir / RESULT, record)
     return record

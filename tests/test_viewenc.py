@@ -1,0 +1,191 @@
+"""The view encoder: lifting a view onto the sphere, training crops, the network, its training."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from roomlight.geometry.projection import panorama_to_perspective, perspective_directions
+from roomlight.viewenc.crops import CropSpec, crop_rotation, cut_view, expose, occluder_mask, random_crop_spec
+from roomlight.viewenc.lift import lift_resolution, lift_view
+from roomlight.viewenc.network import ViewEncoder, view_exposure, view_input
+
+
+def _smooth_panorama(h=16):
+    """(3, h, 2h) radiance and (1, h, 2h) depth that vary smoothly with direction."""
+    from roomlight.geometry.equirect import pixel_directions
+
+    d = pixel_directions(h, 2 * h, dtype=torch.float64)
+    rad = torch.stack([1.0 + 0.5 * d[..., 0], 1.2 + 0.4 * d[..., 1], 0.8 + 0.3 * d[..., 2]]).float()
+    depth = (2.0 + 0.5 * d[..., 0] + 0.3 * d[..., 2])[None].float()
+    return rad, depth
+
+
+def _slow_lift(points, radiance, rotation, h, w):
+    """The lifting written pixel by pixel from the convention's formulas (docs/conventions.md)."""
+    sums = np.zeros((h, w, 4))
+    count = np.zeros((h, w))
+    R = np.asarray(rotation)
+    for p, c in zip(np.asarray(points, np.float64).reshape(-1, 3), np.asarray(radiance, np.float64).reshape(-1, 3)):
+        x, y, z = R @ p
+        r = math.sqrt(x * x + y * y + z * z)
+        u = (math.atan2(x, -z) / (2 * math.pi)) % 1.0
+        v = math.atan2(math.sqrt(x * x + z * z), y) / math.pi
+        i, j = min(int(v * h), h - 1), min(int(u * w), w - 1)
+        sums[i, j] += [c[0], c[1], c[2], math.log(r)]
+        count[i, j] += 1
+    mean = sums / np.maximum(count, 1)[..., None]
+    return mean, count
+
+
+def test_lift_matches_a_pixel_by_pixel_reference():
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(7, 9, 3)) * [1.0, 0.6, 1.5] + [0.2, 0.1, -2.0]
+    radiance = rng.uniform(0, 3, size=(7, 9, 3))
+    rot = crop_rotation(CropSpec(60.0, 7, 9, pitch_deg=12.0, roll_deg=-4.0, yaw_deg=33.0))
+    part = lift_view(torch.from_numpy(points), torch.from_numpy(radiance), rot, (8, 16))
+    mean, count = _slow_lift(points, radiance, rot, 8, 16)
+    np.testing.assert_array_equal(part.count.numpy(), count)
+    np.testing.assert_allclose(part.radiance.permute(1, 2, 0).numpy(), mean[..., :3], atol=1e-5)
+    np.testing.assert_allclose(part.log_depth[0].numpy(), mean[..., 3], atol=1e-5)
+    assert part.seen_fraction == pytest.approx((count > 0).mean())
+
+
+def test_lift_leaves_out_invalid_and_degenerate_samples():
+    points = torch.tensor([[0.0, 0.0, -1.0], [0.0, 0.0, 0.0], [float("nan"), 0.0, -1.0], [1.0, 0.0, 0.0]])
+    radiance = torch.ones(4, 3)
+    part = lift_view(points, radiance, np.eye(3), (4, 8), valid=torch.tensor([True, True, True, False]))
+    assert float(part.count.sum()) == 1.0   # only the first: zero distance, NaN and the masked one go
+
+
+def test_crop_directions_are_those_of_the_perspective_projection():
+    rad, depth = _smooth_panorama()
+    for spec in (CropSpec(70.0, 30, 40, 10.0, 3.0, 40.0), CropSpec(45.0, 24, 24, -20.0, -5.0, 250.0)):
+        image, points = cut_view(rad, depth, spec)
+        R = crop_rotation(spec)
+        dirs = (points / points.norm(dim=-1, keepdim=True)).double() @ torch.from_numpy(R).T
+        ref = perspective_directions(spec.height, spec.width, spec.fov_deg, forward=R @ [0, 0, -1.0],
+                                     up=R @ [0, 1.0, 0], dtype=torch.float64)
+        assert float((dirs - ref).abs().max()) < 1e-6
+        view = panorama_to_perspective(rad[None].double(), spec.height, spec.width, spec.fov_deg,
+                                       forward=R @ [0, 0, -1.0], up=R @ [0, 1.0, 0])[0].permute(1, 2, 0)
+        np.testing.assert_allclose(image.numpy(), view.numpy(), atol=1e-5)
+
+
+def test_a_crop_lifted_back_gives_the_panorama_where_it_is_seen():
+    h = 32
+    rad, depth = _smooth_panorama(h)
+    spec = CropSpec(80.0, *lift_resolution(80.0, 4 / 3, 2 * h), pitch_deg=5.0, yaw_deg=120.0)
+    image, points = cut_view(rad, depth, spec)
+    part = lift_view(points, image, crop_rotation(spec), (h, 2 * h))
+    well = part.count >= 6                      # cells covered by many samples, away from the view's border
+    assert int(well.sum()) > 20
+    err = (part.radiance - rad).abs().amax(0)[well]
+    assert float(err.max()) < 0.05             # a box average of a smooth function at its cell
+    assert float((part.log_depth[0] - depth[0].log()).abs()[well].max()) < 0.03
+
+
+def test_lift_resolution_gives_three_samples_per_cell_at_the_centre():
+    h, w = lift_resolution(90.0, 1.5, 128)
+    f = w / (2 * math.tan(math.radians(45.0)))          # focal length in pixels
+    assert (2 * math.pi / 128) * f == pytest.approx(3.0, rel=0.01)
+    assert w / h == pytest.approx(1.5, rel=0.02)
+
+
+def test_random_specs_stay_in_range_and_occluders_hide_part_of_the_view():
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        s = random_crop_spec(rng, 128)
+        assert 40 <= s.fov_deg <= 100 and abs(s.pitch_deg) <= 25 and abs(s.roll_deg) <= 5 and 0 <= s.yaw_deg < 360
+    shares = [1 - occluder_mask(rng, 60, 80).mean() for _ in range(200)]
+    assert min(shares) == 0.0 and 0.05 < max(shares) < 0.6
+
+
+def test_expose_sets_the_log_average_and_clips():
+    img = torch.rand(10, 12, 3) * 4 + 0.01
+    out, a = expose(img, math.log(0.18))
+    assert float(out.max()) <= 1.0
+    y = 0.2126 * img[..., 0] + 0.7152 * img[..., 1] + 0.0722 * img[..., 2]
+    assert math.exp(a) * math.exp(float(torch.log(y.double() + 1e-6).mean())) == pytest.approx(0.18, rel=1e-3)
+
+
+def test_view_exposure_leaves_out_saturated_cells():
+    part = lift_view(torch.tensor([[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+                     torch.tensor([[0.5, 0.5, 0.5], [0.02, 0.02, 0.02], [1.0, 1.0, 1.0]]), np.eye(3), (8, 16))
+    assert view_exposure(part) == pytest.approx(math.sqrt(0.5 * 0.02), rel=1e-4)
+
+
+@pytest.fixture(scope="module")
+def tiny_prior():
+    from roomlight.model import Normalization, PanoVAE
+    from roomlight.model.config import get_preset
+
+    torch.manual_seed(0)
+    return PanoVAE(get_preset("tiny"), Normalization((0.5, 0.5, 0.5, 0.7), (0.6, 0.6, 0.6, 0.5))).eval()
+
+
+def test_from_prior_reads_a_fully_seen_panorama_as_the_prior_does(tiny_prior):
+    rad, depth = _smooth_panorama(16)
+    net = ViewEncoder.from_prior(tiny_prior)
+    x = torch.cat([tiny_prior.normalization.normalize(rad[None], depth[None])[0], torch.ones(1, 16, 32)])
+    z, s = net(x[None])
+    torch.testing.assert_close(z, tiny_prior.encode(rad[None], depth[None]).mean, rtol=0, atol=1e-6)
+    assert float(s.detach()) == 0.0
+
+
+def test_view_input_divides_by_the_view_exposure_and_zeroes_unseen_cells(tiny_prior):
+    rad, depth = _smooth_panorama(16)
+    spec = CropSpec(60.0, 20, 30)
+    image, points = cut_view(rad, depth, spec)
+    part = lift_view(points, image * 7.0, crop_rotation(spec), (16, 32))
+    x, k = view_input(part, tiny_prior.normalization)
+    x1, k1 = view_input(lift_view(points, image, crop_rotation(spec), (16, 32)), tiny_prior.normalization)
+    assert k == pytest.approx(7.0 * k1, rel=1e-5)
+    torch.testing.assert_close(x, x1, atol=1e-5, rtol=0)     # the input does not depend on the photo's units
+    assert bool((x[:, ~part.seen] == 0).all()) and bool((x[4] == part.seen.float()).all())
+
+
+def test_saved_view_encoder_is_found_beside_its_prior_and_refused_beside_another(tiny_prior, tmp_path):
+    from roomlight.model import PanoVAE
+    from roomlight.model.weights import file_sha256
+
+    tiny_prior.save_pretrained(tmp_path / "prior")
+    net = ViewEncoder.from_prior(tiny_prior)
+    net.prior_sha256 = file_sha256(tmp_path / "prior" / "model.safetensors")
+    net.save_pretrained(tmp_path / "prior" / "view_encoder")
+    loaded = PanoVAE.from_pretrained(tmp_path / "prior")
+    assert loaded.view_encoder is not None
+    assert "view_encoder" not in "".join(loaded.state_dict())      # not part of the prior's weights
+    x = torch.randn(2, 5, 16, 32)
+    torch.testing.assert_close(loaded.view_encoder(x)[0], net(x)[0])
+    net.prior_sha256 = "0" * 64
+    net.save_pretrained(tmp_path / "prior" / "view_encoder")
+    with pytest.warns(UserWarning, match="other prior weights"):
+        assert PanoVAE.from_pretrained(tmp_path / "prior").view_encoder is None
+
+
+def test_training_resumes_exactly(tiny_prior, tmp_path):
+    from roomlight.data.toy import write_toy_dataset
+    from roomlight.viewenc.config import ViewTrainConfig
+    from roomlight.viewenc.trainer import ViewEncoderTrainer
+
+    write_toy_dataset(tmp_path / "data" / "train", 6, height=16)
+    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
+    cfg = ViewTrainConfig(batch_size=3, max_steps=4, val_every=2, ckpt_every=2, val_views=2, log_every=1,
+                          progress=False)
+    quiet = lambda *_: None  # noqa: E731
+    whole = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "a", note=quiet)
+    whole.fit()
+    part = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "b", note=quiet)
+    part.fit(until=2)
+    again = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "b", note=quiet)
+    assert again.step == 2
+    again.fit()
+    for (name, a), (_, b) in zip(whole.net.state_dict().items(), again.net.state_dict().items()):
+        torch.testing.assert_close(a, b, rtol=0, atol=0, msg=name)
+    assert (tmp_path / "b" / "best" / "model.safetensors").exists()
+    with pytest.raises(Exception, match="other settings"):
+        ViewEncoderTrainer(cfg.replace(lr=1e-3), tiny_prior, tmp_path / "data", tmp_path / "b", note=quiet)
