@@ -19,6 +19,7 @@ PACKAGE = Path(roomlight.__file__).parent
 LAYERS = [
     ["cli"],
     ["demo", "experiments"],
+    ["viewenc"],
     ["train", "parallax"],
     ["viewer"],
     ["photobench"],

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import torch
 
+from roomlight.geometry.lift import lift_resolution, lift_view
 from roomlight.geometry.projection import panorama_to_perspective, perspective_directions
+from roomlight.model.view_encoder import ViewEncoder, view_exposure, view_input
 from roomlight.viewenc.crops import CropSpec, crop_rotation, cut_view, expose, occluder_mask, random_crop_spec
-from roomlight.viewenc.lift import lift_resolution, lift_view
-from roomlight.viewenc.network import ViewEncoder, view_exposure, view_input
 
 
 def _smooth_panorama(h=16):

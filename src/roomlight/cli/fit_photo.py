@@ -92,7 +92,7 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     if any(m.startswith("prior") for m in (method, *compare)):
         prior, _ = load_prior(model, f"--method {method}")
         if view_encoder is not None:
-            from roomlight.viewenc import ViewEncoder
+            from roomlight.model.view_encoder import ViewEncoder
 
             prior.set_view_encoder(ViewEncoder.from_pretrained(view_encoder, prior.config))
     click.echo(f"{case.files['image']}: {case.width}x{case.height}, {len(case.objects.ids)} object(s), "

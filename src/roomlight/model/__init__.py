@@ -21,12 +21,14 @@ from roomlight.model.convert import (
 )
 from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.normalization import Normalization
-from roomlight.model.panovae import Decoder, Encoder, PanoVAE
+from roomlight.model.networks import Decoder, Encoder
+from roomlight.model.panovae import PanoVAE
 from roomlight.model.runs import convert_authors_checkpoint, load_run_model, resolve_run_model
+from roomlight.model.view_encoder import ViewEncoder
 
 __all__ = [
     "ModelConfig", "PRESETS", "get_preset", "PanoVAE", "Encoder", "Decoder", "Normalization",
     "DiagonalGaussian", "AUTHORS_NORMALIZATION", "ThirdPartyCheckpointWarning",
     "convert_authors_checkpoint", "from_authors_state_dict", "to_authors_state_dict", "load_run_model",
-    "resolve_run_model",
+    "resolve_run_model", "ViewEncoder",
 ]

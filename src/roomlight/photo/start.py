@@ -48,7 +48,7 @@ def photo_partial_panorama(case, resolution: tuple[int, int]):
     camera (room frame: the camera's pitch and roll applied, no yaw).
 
     The photograph is brought to about three pixels per panorama cell
-    (:func:`~roomlight.viewenc.lift.lift_resolution`): radiance antialiased, depth and labels by
+    (:func:`~roomlight.geometry.lift.lift_resolution`): radiance antialiased, depth and labels by
     nearest neighbour. The objects and a pixel around them are left out; radiance is clipped at 1
     like a recording.
     """
@@ -56,7 +56,7 @@ def photo_partial_panorama(case, resolution: tuple[int, int]):
     from roomlight.photo.geometry import resize_image
     from roomlight.photo.masks import erode, resize_nearest
     from roomlight.photo.unproject import unproject
-    from roomlight.viewenc.lift import lift_resolution, lift_view
+    from roomlight.geometry.lift import lift_resolution, lift_view
 
     k = case.intrinsics
     aspect = case.width / case.height
@@ -76,7 +76,7 @@ def photo_partial_panorama(case, resolution: tuple[int, int]):
 @torch.no_grad()
 def view_latent(model, case) -> tuple[torch.Tensor, float, dict]:
     """The view encoder's start: (z (D,), log exposure in the photograph's units, description)."""
-    from roomlight.viewenc.network import view_input
+    from roomlight.model.view_encoder import view_input
 
     encoder = model.view_encoder
     partial = photo_partial_panorama(case, model.config.resolution)

@@ -1,13 +1,10 @@
-"""The view encoder: an amortized start for fitting the prior to what a photograph shows.
+"""Training the view encoder: the photo fit's amortized start, for a given prior.
 
-- :mod:`~roomlight.viewenc.lift`: a view's pixels onto the panorama around its camera;
+The network and its input live with the prior (:mod:`roomlight.model.view_encoder`), the lifting
+of a view onto the sphere with the geometry (:mod:`roomlight.geometry.lift`); this package trains it:
+
 - :mod:`~roomlight.viewenc.crops`: perspective training views cut from panoramas;
 - :mod:`~roomlight.viewenc.views`: one training view and its targets;
-- :mod:`~roomlight.viewenc.network`: the network and its input;
-- :mod:`~roomlight.viewenc.trainer`: training it against the frozen prior.
+- :mod:`~roomlight.viewenc.config`: the run's settings;
+- :mod:`~roomlight.viewenc.trainer`: training against the frozen prior (``roomlight train-view-encoder``).
 """
-
-from roomlight.viewenc.lift import PartialPanorama, lift_resolution, lift_view
-from roomlight.viewenc.network import VIEW_ENCODER_DIR, ViewEncoder, view_input
-
-__all__ = ["PartialPanorama", "lift_view", "lift_resolution", "ViewEncoder", "view_input", "VIEW_ENCODER_DIR"]

@@ -78,8 +78,8 @@ def random_crop_spec(rng: np.random.Generator, pano_width: int, fov=(40.0, 100.0
                      aspect=(1.0, 1.8), yaw: bool = True, samples_per_cell: float | None = None) -> CropSpec:
     """A random view: fov uniform in ``fov``, pitch uniform in ±``pitch``, roll in ±``roll``, aspect
     (landscape) uniform in ``aspect``, yaw uniform (or 0), at the resolution that
-    :func:`~roomlight.viewenc.lift.lift_resolution` gives for ``pano_width``."""
-    from roomlight.viewenc.lift import SAMPLES_PER_CELL, lift_resolution
+    :func:`~roomlight.geometry.lift.lift_resolution` gives for ``pano_width``."""
+    from roomlight.geometry.lift import SAMPLES_PER_CELL, lift_resolution
 
     f = float(rng.uniform(*fov))
     asp = float(rng.uniform(*aspect))

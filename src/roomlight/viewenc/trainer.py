@@ -34,11 +34,11 @@ import torch
 
 from roomlight.errors import RoomlightError
 from roomlight.losses import vae_loss
+from roomlight.model.view_encoder import ViewEncoder
 from roomlight.train import checkpoint as ck
 from roomlight.train.interrupt import Interrupted, deferred_interrupts
 from roomlight.train.schedule import learning_rate
 from roomlight.viewenc.config import ViewTrainConfig
-from roomlight.viewenc.network import ViewEncoder
 from roomlight.viewenc.views import training_view
 
 __all__ = ["ViewEncoderTrainer", "load_panoramas", "TERMS"]
@@ -211,7 +211,7 @@ class ViewEncoderTrainer:
         terms["total"].backward()
         gnorm = torch.nn.utils.clip_grad_norm_(self.net.parameters(), cfg.grad_clip if cfg.grad_clip > 0 else math.inf)
         self.optimizer.step()
-        out = {k: float(v) for k, v in terms.items()}
+        out = {k: float(v.detach()) for k, v in terms.items()}
         out.update(grad_norm=float(gnorm), lr=lr)
         return out
 

@@ -3,7 +3,7 @@
 From a panorama (radiance calibrated to log-average luminance 1, radial depth in metres):
 mirror it or not, cut a random perspective view (:mod:`roomlight.viewenc.crops`), expose and clip
 it like a photograph, hide random objects, lift it back onto the sphere
-(:mod:`roomlight.viewenc.lift`) and make the network's input (:func:`view_input`).
+(:mod:`roomlight.geometry.lift`) and make the network's input (:func:`view_input`).
 
 The exposure target follows from the units: the view holds ``e^a · L`` (``a`` from the exposure),
 the network input holds that divided by ``k`` (the view's log-average), so the light in the
@@ -18,10 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from roomlight.viewenc.crops import CropSpec, cut_view, expose, occluder_mask, random_crop_spec
-from roomlight.viewenc.lift import lift_view
-from roomlight.viewenc.crops import crop_rotation
-from roomlight.viewenc.network import view_input
+from roomlight.geometry.lift import lift_view
+from roomlight.model.view_encoder import view_input
+from roomlight.viewenc.crops import CropSpec, crop_rotation, cut_view, expose, occluder_mask, random_crop_spec
 
 __all__ = ["TrainingView", "training_view"]
 

@@ -1,6 +1,6 @@
 """The view encoder: what a photograph shows -> the prior's latent z and a log exposure.
 
-The input is a :class:`~roomlight.viewenc.lift.PartialPanorama` made into five channels at the
+The input is a :class:`~roomlight.geometry.lift.PartialPanorama` made into five channels at the
 prior's resolution (:func:`view_input`):
 
     (log1p R, log1p G, log1p B, log D) z-scored with the prior's statistics, 0 where unseen,
@@ -11,7 +11,7 @@ are not saturated), because a photograph's units are arbitrary. The network pred
 ``s``: the light in the units of the photograph is ``k · e^s · decode(z).radiance``; depth is in
 the photograph's metres.
 
-The backbone is the prior's encoder (:class:`~roomlight.model.panovae.Encoder`) with one more
+The backbone is the prior's encoder (:class:`~roomlight.model.networks.Encoder`) with one more
 input channel; its weights start from the prior's encoder (the mask channel's weights at 0), so
 an untrained view encoder already reads a seen part of a room as the prior would.
 """
@@ -27,11 +27,11 @@ from torch import nn
 
 from roomlight.color import LOG_EPS, luminance_torch
 from roomlight.errors import InputFileError
+from roomlight.geometry.lift import PartialPanorama
 from roomlight.model.config import ModelConfig
+from roomlight.model.networks import Encoder
 from roomlight.model.normalization import Normalization
-from roomlight.model.panovae import Encoder
 from roomlight.model.weights import file_sha256, load_state_dict_checked, load_weights_file
-from roomlight.viewenc.lift import PartialPanorama
 
 __all__ = ["ViewEncoder", "view_input", "view_exposure", "load_view_encoder_beside", "VIEW_ENCODER_DIR",
            "FORMAT_NAME", "SATURATION"]
