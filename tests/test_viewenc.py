@@ -189,3 +189,53 @@ def test_training_resumes_exactly(tiny_prior, tmp_path):
     assert (tmp_path / "b" / "best" / "model.safetensors").exists()
     with pytest.raises(Exception, match="other settings"):
         ViewEncoderTrainer(cfg.replace(lr=1e-3), tiny_prior, tmp_path / "data", tmp_path / "b", note=quiet)
+
+
+def test_a_photo_is_lifted_without_its_objects_and_with_its_pitch():
+    from roomlight.geometry.equirect import direction_to_uv
+    from roomlight.photo.camera import camera_rotation
+    from roomlight.photo.case import PhotoCase
+    from roomlight.photo.masks import ObjectLabels
+    from roomlight.photo.start import photo_partial_panorama
+
+    h = 32
+    rad, depth = _smooth_panorama(h)
+    spec = CropSpec(70.0, *lift_resolution(70.0, 4 / 3, 2 * h), pitch_deg=-15.0)
+    image, points = cut_view(rad, depth, spec)
+    labels = np.zeros(image.shape[:2], np.int32)
+    labels[spec.height // 2:, : spec.width // 3] = 1              # an object in the lower left
+    case = PhotoCase(0.5 * image.numpy(), (-points[..., 2]).numpy(), "z", spec.intrinsics,  # below saturation
+                     ObjectLabels(labels, "binary", [1]), pitch_deg=-15.0)
+    part = photo_partial_panorama(case, (h, 2 * h))
+    well = part.count >= 6
+    assert int(well.sum()) > 20
+    assert float((part.radiance - 0.5 * rad).abs().amax(0)[well].max()) < 0.03
+    assert float((part.log_depth[0] - depth[0].log()).abs()[well].max()) < 0.03
+    # the cells of the object's pixels (away from its border) are not seen
+    rays = (points / points.norm(dim=-1, keepdim=True)).double() @ torch.from_numpy(camera_rotation(-15.0, 0.0)).T
+    inner = rays[spec.height // 2 + 3:, 1: spec.width // 3 - 3].reshape(-1, 3)
+    u, v = direction_to_uv(inner)
+    rows, cols = (v * h).long(), (u * 2 * h).long()
+    hidden = torch.zeros(h, 2 * h, dtype=torch.bool)
+    hidden[rows, cols] = True
+    background = rays[: spec.height // 2 - 2].reshape(-1, 3)
+    u, v = direction_to_uv(background)
+    hidden[(v * h).long(), (u * 2 * h).long()] = False            # cells shared with the room stay seen
+    assert bool(hidden.any()) and not bool(part.seen[hidden].any())
+
+
+def test_the_start_resolves_auto_and_refuses_view_without_an_encoder(tiny_prior):
+    from roomlight.errors import RoomlightError
+    from roomlight.photo.start import resolve_start
+
+    assert tiny_prior.view_encoder is None
+    assert resolve_start("auto", tiny_prior) == "samples" and resolve_start("zero", tiny_prior) == "zero"
+    with pytest.raises(RoomlightError, match="needs a prior with a view encoder"):
+        resolve_start("view", tiny_prior)
+    with pytest.raises(RoomlightError, match="expected one of"):
+        resolve_start("best", tiny_prior)
+    tiny_prior.set_view_encoder(ViewEncoder.from_prior(tiny_prior))
+    try:
+        assert resolve_start("auto", tiny_prior) == "view"
+    finally:
+        tiny_prior.set_view_encoder(None)
