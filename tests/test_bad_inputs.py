@@ -161,6 +161,8 @@ FOLDER_COMMANDS = {
     "data stats": lambda w, d, out: ["data", "stats", d, "--config", "tiny", "--out", out / "stats.json"],
     "eval-prior": lambda w, d, out: ["eval-prior", "--model", w["model"], "--data", d, "--fit-steps", 0, "--out", out],
     "bench make": lambda w, d, out: ["bench", "make", "--panos", d, "--out", out, "--quiet"],
+    "train-view-encoder": lambda w, d, out: ["train-view-encoder", "--data", d, "--out", out, "--model", w["model"],
+                                             "--max-steps", 2],
 }
 
 
@@ -174,7 +176,7 @@ def test_folder_without_a_usable_panorama(workspace, tmp_path, command, content)
     out = tmp_path / "out"
     r = run(FOLDER_COMMANDS[command](workspace, data, out), tmp_path)
     assert_one_clean_line(r, str(data), out)
-    if content == "not-an-exr" and command in ("train", "data stats", "eval-prior"):
+    if content == "not-an-exr" and command in ("train", "data stats", "eval-prior", "train-view-encoder"):
         assert "notes.exr" in r.output  # each skipped file is named with its reason first
         assert "no usable panorama in" in r.stderr
 

@@ -104,14 +104,15 @@ class ViewEncoderTrainer:
             p.requires_grad_(False)
         self.note = note or print
         self.run_dir = Path(run_dir)
-        self.run_dir.mkdir(parents=True, exist_ok=True)
         self.prior_sha = None
         if prior_path is not None and (Path(prior_path) / "model.safetensors").exists():
             self.prior_sha = file_sha256(Path(prior_path) / "model.safetensors")
         fresh = self._check_run(prior_path, data_dir)
         res = prior.config.resolution
+        # The data first: a folder without usable panoramas stops the run before anything is written.
         self.train_rad, self.train_dep, self.train_names = load_panoramas(data_dir, "train", res, limit, self.note)
         val_rad, val_dep, _ = load_panoramas(data_dir, "val", res, config.val_views, self.note)
+        self.run_dir.mkdir(parents=True, exist_ok=True)
         self.targets = self._encoder_means(self.train_rad, self.train_dep)
         self.val = self._validation_views(val_rad, val_dep)
         torch.manual_seed(config.seed)
