@@ -623,7 +623,9 @@ def test_prior_ceiling_and_start_rows_split_the_gap(built, tmp_path, monkeypatch
     gap = json.loads((res / "report" / "summary.json").read_text())["gap_steps"]
     step = next(g for g in gap if g["method"] == "prior-ceiling")
     assert set(step["paired"]) == {"oracle"}                 # each step pairs exactly its two rows
-    assert "prior-ceiling" not in json.loads((res / "report" / "summary.json").read_text())["paired"]["probes"]
+    summary = json.loads((res / "report" / "summary.json").read_text())
+    assert "prior-ceiling" not in summary["paired"]["probes"]
+    assert summary["probes_outside"]["oracle"]["outside"] == 0 and summary["probes_outside"]["oracle"]["probes"] >= 1
 
     # the start variants are fit-photo's prior with --init fixed
     seen = {}
@@ -638,3 +640,26 @@ def test_prior_ceiling_and_start_rows_split_the_gap(built, tmp_path, monkeypatch
     with pytest.raises(RuntimeError, match="stop here"):
         adapter.fit_photo_case(_case(built), "prior-zero", "fast", tmp_path / "f")
     assert seen == {"method": "prior", "init": "zero"}
+
+
+@pytest.mark.mitsuba
+def test_probes_outside_a_small_light_are_counted_and_none_inside_a_large_one(built):
+    from roomlight.photobench.scoring import RecoveredLight, load_truth, oracle_light, probes_outside
+
+    truth = load_truth(_case(built))
+    oracle = oracle_light(_case(built), "mesh", truth)
+    rad = np.ones((8, 16, 3), np.float32)
+
+    def light(depth):
+        return RecoveredLight(rad, np.full((8, 16), depth, np.float32), "mesh", oracle.light_from_camera)
+
+    # the probes stand within a few metres of the oracle centre, the light's origin
+    tiny = probes_outside(truth, light(0.01), given_depth=False)
+    assert set(tiny) == {str(p.label) for p in truth.probes} and all(v == 1.0 for v in tiny.values())
+    assert all(v == 0.0 for v in probes_outside(truth, light(1000.0), given_depth=False).values())
+    assert probes_outside(truth, RecoveredLight(rad, None, "envmap", oracle.light_from_camera)) == {}
+    # a probe straddling the light's surface is partly outside: put the surface at its centre's distance
+    p = truth.probes[0]
+    centre = oracle.light_from_camera @ np.linalg.inv(truth.camera.matrix) @ np.append(p.center, 1.0)
+    share = probes_outside(truth, light(float(np.linalg.norm(centre[:3]))), given_depth=False)[str(p.label)]
+    assert 0.2 < share < 0.8

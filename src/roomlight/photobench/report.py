@@ -111,6 +111,39 @@ def materials_table(records: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def outside_counts(results: list[dict]) -> dict:
+    """Per method with a 2.5D light: how many probes have part of their surface outside the light
+    (``{method: {"outside": n, "probes": m, "cases": [photo/probe, ...]}}``). Results written before the
+    runner recorded ``probes_outside`` are measured from their ``recovered.exr``."""
+    out: dict[str, dict] = {}
+    for r in results:
+        shares = r.get("probes_outside")
+        if shares is None:
+            shares = _outside_from_files(r)
+        if not shares:
+            continue
+        entry = out.setdefault(r["method"], {"outside": 0, "probes": 0, "cases": []})
+        for label, share in sorted(shares.items()):
+            entry["probes"] += 1
+            if share > 0:
+                entry["outside"] += 1
+                entry["cases"].append(f"{r['photo']}/probe {label} ({100 * share:.0f} %)")
+    return out
+
+
+def _outside_from_files(r: dict) -> dict:
+    from roomlight.io import read_panorama
+    from roomlight.photobench.runner import REFERENCES
+    from roomlight.photobench.scoring import RecoveredLight, load_truth, probes_outside
+
+    path = Path(r["_dir"]) / "recovered.exr"
+    if r.get("emitter_kind") != "mesh" or not path.is_file():
+        return {}
+    pano = read_panorama(path)
+    light = RecoveredLight(pano.radiance, pano.depth, "mesh", np.asarray(pano.metadata["light_from_camera"]))
+    return probes_outside(load_truth(r["case_dir"]), light, given_depth=r["method"] not in REFERENCES)
+
+
 def _timing(results: list[dict]) -> dict:
     t: dict[str, list[float]] = {}
     for r in results:
@@ -171,7 +204,19 @@ def _gap_markdown(gap: list[dict], materials) -> list[str]:
     return md
 
 
-def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=()) -> str:
+def _outside_markdown(outside: dict) -> list[str]:
+    if not outside:
+        return []
+    md = ["## Probes outside the 2.5D light", "",
+          "A probe outside the light sees only the mesh's back faces, which emit nothing, and renders black.", "",
+          "| Method | probes with part of their surface outside | which |", "|---|---:|---|"]
+    for m in ordered(outside, PHOTO_METHOD_ORDER):
+        e = outside[m]
+        md.append(f"| {m} | {e['outside']} of {e['probes']} | {', '.join(e['cases']) or '–'} |")
+    return md + [""]
+
+
+def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(), outside=None) -> str:
     photos = len({r["photo"] for r in results})
     md = ["# Photo benchmark results", "",
           f"{len(results)} cases, {photos} photos. Cells: mean ± std over photos (one photo: its value alone); "
@@ -180,6 +225,7 @@ def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(
           "## Paired differences on the probes: the prior against each baseline", "",
           paired_markdown(paired, "prior", [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
           *_gap_markdown(list(gap), [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
+          *_outside_markdown(outside or {}),
           "## Recovered materials (mean error over each photo's objects)", "", materials_table(mats),
           "## Paired differences on the materials", "",
           paired_markdown(paired_mat, "prior", ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()}),
@@ -303,6 +349,7 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
     paired_mat = paired_differences(mats, "prior", "materials", exclude=_EXCLUDE, metrics=MATERIAL_METRICS,
                                     higher_is_better=_LOWER)
     gap = gap_steps(probes)
+    outside = outside_counts(results)
     timing = _timing(results)
     paths = {"markdown": out / "report.md", "csv": out / "table.csv", "materials": out / "materials.csv",
              "cases": out / "cases.csv", "json": out / "summary.json"}
@@ -318,11 +365,11 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
                "materials": {m: {k: {"mean": float(np.mean([v[k] for v in vals])),
                                      "std": float(np.std([v[k] for v in vals])), "n": len(vals)}
                                  for k in MATERIAL_METRICS} for m, vals in mat_summary.items()},
-               "paired": {"probes": paired, "materials": paired_mat}, "gap_steps": gap, "timing": timing,
+               "paired": {"probes": paired, "materials": paired_mat}, "gap_steps": gap, "probes_outside": outside, "timing": timing,
                "failed": [f.get("case", "?") for f in failures], "settings": settings,
                "std": "population standard deviation over photos (ddof = 0)"}
     paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
-    paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures, gap))
+    paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures, gap, outside))
     figs: dict[str, Path] = {}
     if figures:
         by: dict[str, list[dict]] = {}

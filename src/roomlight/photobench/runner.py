@@ -39,6 +39,7 @@ from roomlight.photobench.adapter import FIT_PHOTO_METHODS, PHOTO_FIT_METHODS, f
 from roomlight.photobench.ceiling import CEILING, prior_ceiling_light
 from roomlight.photobench.builder import read_photo_manifest
 from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_truth, material_errors, oracle_light,
+                                          probes_outside,
                                           score_light)
 
 __all__ = ["ORACLES", "REFERENCES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE", "PhotoCase",
@@ -123,8 +124,10 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
     scores = score_light(truth, light, eval_spp, renders=renders, given_depth=case.method not in REFERENCES)
     for m, img in renders.items():
         write_rgb_exr(cdir / f"probes_{m}.exr", img)
+    outside = probes_outside(truth, light, given_depth=case.method not in REFERENCES)
     record = {"photo": case.photo, "case_dir": str(Path(case.case_dir).resolve()), "method": case.method,
               "emitter_kind": light.kind, "probes": scores, "materials": materials,
+              "probes_outside": outside,
               "depth_factors": truth.depth_factors, "fit_seconds": fit_seconds, "wall_seconds": wall,
               "eval_seconds": time.perf_counter() - t1, "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH,
               "recovered_resolution": list(light.radiance.shape[:2]),

@@ -248,6 +248,38 @@ def score_light(truth: PhotoTruth, light: RecoveredLight, spp: int = 64, seed: i
     return out
 
 
+def _sphere_points(count: int = 256) -> np.ndarray:
+    """(count, 3) unit vectors spread evenly over the sphere (a Fibonacci lattice)."""
+    i = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * i / count
+    r = np.sqrt(1.0 - z * z)
+    phi = np.pi * (1.0 + 5.0 ** 0.5) * i
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+
+
+def probes_outside(truth: PhotoTruth, light: RecoveredLight, given_depth: bool = True, points: int = 256) -> dict:
+    """Per probe (by label), the share of its surface that the 2.5D ``light`` does not enclose, placed as
+    :func:`render_probes` places it; an empty dict for a light without depth (an env map). A probe
+    outside the light sees the mesh's back faces, which emit nothing, and renders black."""
+    import torch
+
+    from roomlight.inverse.floor import outside_share
+
+    if light.depth is None:
+        return {}
+    world_to_camera = np.linalg.inv(truth.camera.matrix)
+    unit = _sphere_points(points)
+    depth = torch.from_numpy(np.asarray(light.depth, np.float64))
+    out = {}
+    for p in truth.probes:
+        f = truth.depth_factors.get(p.id, 1.0) if given_depth else 1.0
+        m = np.asarray(light.light_from_camera, np.float64) @ np.diag([f, f, f, 1.0]) @ world_to_camera
+        world = np.asarray(p.center, np.float64) + p.radius * unit
+        q = world @ m[:3, :3].T + m[:3, 3]
+        out[str(p.label)] = outside_share(depth, torch.from_numpy(q))
+    return out
+
+
 def material_errors(truth: dict, recovered: dict) -> dict:
     """Errors of recovered materials against the true ones.
 
