@@ -93,6 +93,7 @@ def main(argv: list[str] | None = None) -> int:
         print(text)
         return 0
 
+    had_view_encoder = (dest / "view_encoder").is_dir()
     # Write into a sibling temporary folder and swap it in, so an interruption leaves either the
     # old bundle or the new one, never a mix of one's weights and the other's config.
     dest.parent.mkdir(parents=True, exist_ok=True)
@@ -118,6 +119,10 @@ def main(argv: list[str] | None = None) -> int:
         shutil.rmtree(old)
     print(f"{dest}: {src} (sha256 {cfg['weights_sha256'][:12]}, best step {cfg['metadata'].get('best_step')}), "
           f"{len(cfg['metadata']['earlier_schedules'])} earlier schedules recorded; {len(a)} tensors identical")
+    if had_view_encoder:
+        print(f"note: the view encoder of the replaced weights was trained for them and is not carried over; train "
+              f"one for these with `roomlight train-view-encoder --model {dest}` and copy its best/ into "
+              f"{dest}/view_encoder (until then fit-photo starts from the paper's samples)")
     return 0
 
 

@@ -51,10 +51,13 @@ def bundle_and_run(tmp_path):
     return dest, run
 
 
-def test_bundling_copies_the_weights_and_appends_the_replaced_ones_to_the_history(bundle_and_run):
+def test_bundling_copies_the_weights_and_appends_the_replaced_ones_to_the_history(bundle_and_run, capsys):
     dest, run = bundle_and_run
     old_sha = _sha(dest / "model.safetensors")
+    (dest / "view_encoder").mkdir()                 # trained for the weights being replaced
+    (dest / "view_encoder" / "config.json").write_text("{}")
     assert _script().main([str(run), "--data", "rooms B", "--dest", str(dest)]) == 0
+    assert "not carried over" in capsys.readouterr().out and not (dest / "view_encoder").exists()
     assert (dest / "model.safetensors").read_bytes() == (run / "best" / "model.safetensors").read_bytes()
     cfg = json.loads((dest / "config.json").read_text())
     meta = cfg["metadata"]
