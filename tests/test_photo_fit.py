@@ -148,16 +148,22 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
     true room: the recovered 2.5D light shows each probe its surroundings better than the same
     prior fitted as an env map, at both positions, although the two see very different light.
 
-    The fit runs the ``fast`` preset's full 120 steps: with the bundled prior, after 40 or 80 steps the
-    probe on the near sphere is not yet better under the 2.5D light (mirror RMSE 1.02 against 1.00 at 80
-    steps) while the far one already is (0.53 against 1.77)."""
+    Both fits start as the paper does (``init = samples``) and run the ``fast`` preset's full 120 steps:
+    with the bundled prior, after 40 or 80 steps the probe on the near sphere is not yet better under the
+    2.5D light (mirror RMSE 1.02 against 1.00 at 80 steps) while the far one already is (0.53 against 1.77).
+
+    The 2.5D fit from the view encoder's start does better still at both positions (measured at 120
+    steps: mirror RMSE 0.22 and 0.20, against 0.85 and 0.58 from the paper's start and 1.00 and 1.39 for
+    the env map). From that start the prior's env map is as good on this small scene (0.20 and 0.19),
+    so the claim above holds in the paper's setting only."""
     from roomlight.photo import fit_photo
     from roomlight.photo.outputs import light_view
     from roomlight.photo.probes import LightView, ProbeSite, closeup_disc, render_probes
 
     _, case, truth = photo
-    cfg = _config(iterations=120, spp=8)
+    cfg = _config(iterations=120, spp=8, init="samples")
     fits = {m: fit_photo(case, m, cfg, model=prior, progress=False) for m in ("prior", "prior-envmap")}
+    fits["prior from the view"] = fit_photo(case, "prior", cfg.override(init="view"), model=prior, progress=False)
     g = fits["prior"].geometry
     sites = []
     for obj in g.objects:  # on top of each sphere
@@ -182,3 +188,4 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
                           for k in range(2)]
     for k in range(2):
         assert errors["prior"][k] < errors["prior-envmap"][k], errors
+        assert errors["prior from the view"][k] < 0.5 * errors["prior"][k], errors
