@@ -16,7 +16,10 @@ from roomlight.cli.common import RoomlightGroup  # noqa: E402
 @click.version_option(__version__, prog_name="roomlight")
 @click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
               help="Threads for torch and Mitsuba [default: $ROOMLIGHT_THREADS, else the CPUs available].")
-def cli(threads):
+@click.option("--deterministic", is_flag=True,
+              help="Bit-identical results run to run: Mitsuba's CPU backend on one thread (slower; "
+                   "docs/troubleshooting.md). Also $ROOMLIGHT_DETERMINISTIC=1.")
+def cli(threads, deterministic):
     """roomlight: spatially-varying indoor illumination as 2.5D area lights.
 
     Panoramas of HDR radiance + radial depth become emissive meshes that light a scene
@@ -41,6 +44,10 @@ def cli(threads):
       roomlight experiment capacity|ablate|cost   the paper's supplementary analyses
     """
     apply_thread_policy(threads)
+    if deterministic:
+        import os
+
+        os.environ["ROOMLIGHT_DETERMINISTIC"] = "1"
 
 
 def _register():

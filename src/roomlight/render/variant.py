@@ -14,8 +14,8 @@ import os
 
 from roomlight.errors import BackendError
 
-__all__ = ["MIN_LLVM", "llvm_status", "cuda_available", "choose_variant", "ensure_variant", "mitsuba",
-           "torch_device"]
+__all__ = ["MIN_LLVM", "ENV_DETERMINISTIC", "deterministic", "llvm_status", "cuda_available", "choose_variant",
+           "ensure_variant", "mitsuba", "torch_device"]
 
 MIN_LLVM = (16, 0, 0)
 LLVM_FIX = (
@@ -85,13 +85,27 @@ def ensure_variant(prefer: str | None = None) -> str:
     mi.set_variant(name)
     _active = name
     threads = os.environ.get("ROOMLIGHT_THREADS", "")
-    # The command line's thread policy (roomlight.cli.threads). Dr.Jit keeps at least two workers:
-    # with one, Mitsuba's parallel scene loading waits on itself.
-    if threads.isdigit() and name.startswith("llvm"):
+    if deterministic() and name.startswith("llvm"):
+        # Dr.Jit's workers add gradients (and samples) into shared texels and vertices in whatever
+        # order they reach them, which changes the last bits run to run; one worker fixes the order.
+        import drjit as dr
+
+        dr.set_thread_count(1)
+    elif threads.isdigit() and name.startswith("llvm"):
+        # The command line's thread policy (roomlight.cli.threads). Two workers at least otherwise.
         import drjit as dr
 
         dr.set_thread_count(max(2, int(threads)))
     return name
+
+
+#: Set to 1 (``roomlight --deterministic``) for bit-identical renders and fits on the CPU.
+ENV_DETERMINISTIC = "ROOMLIGHT_DETERMINISTIC"
+
+
+def deterministic() -> bool:
+    """Whether ``$ROOMLIGHT_DETERMINISTIC`` asks for bit-identical results (Dr.Jit on one CPU thread)."""
+    return os.environ.get(ENV_DETERMINISTIC, "").strip().lower() in ("1", "true", "yes", "on")
 
 
 def mitsuba():
