@@ -26,7 +26,8 @@ from roomlight.model.config import ModelConfig
 from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.networks import Decoder, Encoder
 from roomlight.model.normalization import Normalization
-from roomlight.model.weights import CONFIG_KEYS, file_sha256, load_state_dict_checked, load_weights_file
+from roomlight.model.weights import (CONFIG_KEYS, file_sha256, load_state_dict_checked, load_weights_file,
+                                    read_config_json)
 
 __all__ = ["Encoder", "Decoder", "PanoVAE", "WEIGHTS_NAME", "CONFIG_NAME", "FORMAT_NAME"]
 
@@ -215,18 +216,7 @@ class PanoVAE(nn.Module):
         from roomlight.config import check_keys
 
         cfg_path = directory / CONFIG_NAME
-        try:
-            meta = json.loads(cfg_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as e:
-            raise InputFileError(cfg_path, f"cannot read JSON ({e})") from None
-        if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
-            found = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
-            raise InputFileError(cfg_path, f"format is {found!r}, expected {FORMAT_NAME!r}")
-        if not isinstance(meta.get("format_version", 0), int) or meta.get("format_version", 0) > FORMAT_VERSION:
-            raise InputFileError(
-                cfg_path, f"format_version {meta['format_version']!r} is not one this roomlight "
-                f"understands ({FORMAT_VERSION})", "upgrade roomlight",
-            )
+        meta = read_config_json(cfg_path, FORMAT_NAME, FORMAT_VERSION)
         try:
             check_keys(meta, CONFIG_KEYS, "config")
             config = ModelConfig.from_dict(meta.get("model"), where="config.model")

@@ -31,7 +31,7 @@ from roomlight.geometry.lift import PartialPanorama
 from roomlight.model.config import ModelConfig
 from roomlight.model.networks import Encoder
 from roomlight.model.normalization import Normalization
-from roomlight.model.weights import file_sha256, load_state_dict_checked, load_weights_file
+from roomlight.model.weights import file_sha256, load_state_dict_checked, load_weights_file, read_config_json
 
 __all__ = ["ViewEncoder", "view_input", "view_exposure", "load_view_encoder_beside", "VIEW_ENCODER_DIR",
            "FORMAT_NAME", "SATURATION"]
@@ -139,13 +139,7 @@ class ViewEncoder(nn.Module):
         """Load a saved view encoder; with ``prior_config``, refuse one made for another architecture."""
         directory = Path(directory)
         cfg_path = directory / CONFIG_NAME
-        try:
-            meta = json.loads(cfg_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as e:
-            raise InputFileError(cfg_path, f"cannot read the view encoder's config ({e})") from None
-        if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
-            raise InputFileError(cfg_path, f"not a view encoder (format {meta.get('format') if isinstance(meta, dict) else None!r}, "
-                                 f"expected {FORMAT_NAME!r})")
+        meta = read_config_json(cfg_path, FORMAT_NAME, FORMAT_VERSION)
         config = ModelConfig.from_dict(meta.get("model"), where="view_encoder.model")
         if prior_config is not None and config != prior_config:
             raise InputFileError(cfg_path, "the view encoder was trained for another prior architecture",

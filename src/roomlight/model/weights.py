@@ -68,3 +68,25 @@ def load_weights_file(path, sha256: str | None = None) -> dict:
     except Exception as exc:  # safetensors raises its own SafetensorError, or OSError/ValueError
         raise InputFileError(path, f"not a readable safetensors file ({str(exc).splitlines()[0][:120]})",
                              "copy the checkpoint folder again, or retrain") from None
+
+
+def read_config_json(path, format_name: str, format_version: int) -> dict:
+    """The JSON object of a checkpoint's ``config.json`` whose ``format`` is ``format_name`` and whose
+    ``format_version`` is at most ``format_version``; anything else raises :class:`InputFileError`
+    naming the file."""
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:
+        raise InputFileError(path, f"cannot read JSON ({e})") from None
+    if not isinstance(meta, dict) or meta.get("format") != format_name:
+        found = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
+        raise InputFileError(path, f"format is {found!r}, expected {format_name!r}")
+    version = meta.get("format_version", 0)
+    if not isinstance(version, int) or version > format_version:
+        raise InputFileError(path, f"format_version {version!r} is not one this roomlight understands "
+                             f"({format_version})", "upgrade roomlight")
+    return meta

@@ -83,8 +83,3 @@ class ViewTrainConfig(StrictConfig):
         if isinstance(overrides.get("loss"), dict):
             overrides["loss"] = {**self.loss, **overrides["loss"]}
         return dataclasses.replace(self, **checked_fields(type(self), overrides))
-
-    def differences(self, other: "ViewTrainConfig") -> list[str]:
-        """Fields (outside :data:`RESUME_SAFE_FIELDS`) whose values differ from ``other``'s."""
-        a, b = self.to_dict(), other.to_dict()
-        return [f"{k}: {a[k]!r} -> {b[k]!r}" for k in a if k not in RESUME_SAFE_FIELDS and a[k] != b.get(k)]

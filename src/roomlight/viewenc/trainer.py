@@ -36,9 +36,10 @@ from roomlight.errors import RoomlightError
 from roomlight.losses import vae_loss
 from roomlight.model.view_encoder import ViewEncoder
 from roomlight.train import checkpoint as ck
+from roomlight.train.config import config_differences
 from roomlight.train.interrupt import Interrupted, deferred_interrupts
 from roomlight.train.schedule import learning_rate
-from roomlight.viewenc.config import ViewTrainConfig
+from roomlight.viewenc.config import RESUME_SAFE_FIELDS, ViewTrainConfig
 from roomlight.viewenc.views import training_view
 
 __all__ = ["ViewEncoderTrainer", "load_panoramas", "TERMS"]
@@ -139,7 +140,7 @@ class ViewEncoderTrainer:
         if not path.exists():
             return True
         saved = json.loads(path.read_text())
-        diffs = ViewTrainConfig.from_dict(saved["config"]).differences(self.cfg)
+        diffs = config_differences(ViewTrainConfig.from_dict(saved["config"]), self.cfg, RESUME_SAFE_FIELDS)
         if saved.get("prior_weights_sha256") != self.prior_sha:
             diffs.append("the prior's weights")
         if diffs:
