@@ -28,7 +28,7 @@ from roomlight.model.runs import OPTIMIZER_NAME, STATE_NAME, latest_checkpoint, 
 
 __all__ = ["atomic_write_text", "replace_dir", "optimizer_to_tensors", "optimizer_from_tensors",
            "save_training_state", "load_training_state", "latest_checkpoint", "checkpoint_name",
-           "prune_checkpoints", "resolve_run_model", "load_run_model"]
+           "prune_checkpoints", "checkpoint_paths", "publish_checkpoint", "resolve_run_model", "load_run_model"]
 
 def checkpoint_name(step: int) -> str:
     """Directory name of the checkpoint after ``step`` optimiser steps."""
@@ -133,6 +133,21 @@ def load_training_state(directory: Path, rank: int = 0) -> dict:
                              "delete this directory to resume from the previous checkpoint") from None
     return {"trainer_state": trainer_state, "optimizer": optimizer_from_tensors(tensors, meta), "rng": rng,
             "model_dir": directory}
+
+
+def checkpoint_paths(run_dir: str | Path, step: int) -> tuple[Path, Path]:
+    """(final, temporary) directories of the checkpoint after ``step`` steps in ``run_dir``."""
+    ckdir = Path(run_dir) / "checkpoints"
+    name = checkpoint_name(step)
+    return ckdir / name, ckdir / f".tmp-{name}"
+
+
+def publish_checkpoint(run_dir: str | Path, tmp: Path, final: Path, step: int, keep: int) -> None:
+    """Move the finished ``tmp`` checkpoint to ``final``, point ``latest.json`` at it and keep the
+    newest ``keep`` periodic checkpoints."""
+    replace_dir(tmp, final)
+    atomic_write_text(final.parent / "latest.json", json.dumps({"name": final.name, "step": step}) + "\n")
+    prune_checkpoints(run_dir, keep)
 
 
 def prune_checkpoints(run_dir: str | Path, keep: int) -> None:

@@ -255,9 +255,7 @@ class Trainer:
 
     def save_checkpoint(self) -> Path:
         """Write a resumable checkpoint of the current step (atomically); returns its directory."""
-        ckdir = self.run_dir / "checkpoints"
-        name = ck.checkpoint_name(self.step)
-        final, tmp = ckdir / name, ckdir / f".tmp-{name}"
+        final, tmp = ck.checkpoint_paths(self.run_dir, self.step)
         if final.exists():
             return final
         if self.dist.is_main:
@@ -269,9 +267,7 @@ class Trainer:
                                write_shared=self.dist.is_main)
         barrier(self.dist)
         if self.dist.is_main:
-            ck.replace_dir(tmp, final)
-            ck.atomic_write_text(ckdir / "latest.json", json.dumps({"name": name, "step": self.step}) + "\n")
-            ck.prune_checkpoints(self.run_dir, self.cfg.keep_checkpoints)
+            ck.publish_checkpoint(self.run_dir, tmp, final, self.step, self.cfg.keep_checkpoints)
             self.log.event("checkpoint", self.step, path=str(final))
         self.last_checkpoint = final
         return final

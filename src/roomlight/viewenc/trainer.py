@@ -264,9 +264,7 @@ class ViewEncoderTrainer:
             f.write(json.dumps({"event": kind, "step": step, "time": time.time(), **values}) + "\n")
 
     def save_checkpoint(self) -> Path:
-        ckdir = self.run_dir / "checkpoints"
-        name = ck.checkpoint_name(self.step)
-        final, tmp = ckdir / name, ckdir / f".tmp-{name}"
+        final, tmp = ck.checkpoint_paths(self.run_dir, self.step)
         if final.exists():
             return final
         shutil.rmtree(tmp, ignore_errors=True)
@@ -275,9 +273,7 @@ class ViewEncoderTrainer:
                  "rng": self.rng.bit_generator.state}
         ck.save_training_state(tmp, model=self.net, optimizer=self.optimizer, train_config=self.cfg.to_dict(),
                                trainer_state=state, rng={"torch": torch.get_rng_state()})
-        ck.replace_dir(tmp, final)
-        ck.atomic_write_text(ckdir / "latest.json", json.dumps({"name": name, "step": self.step}) + "\n")
-        ck.prune_checkpoints(self.run_dir, self.cfg.keep_checkpoints)
+        ck.publish_checkpoint(self.run_dir, tmp, final, self.step, self.cfg.keep_checkpoints)
         self._log("checkpoint", self.step, path=str(final))
         self.last_checkpoint = final
         return final
