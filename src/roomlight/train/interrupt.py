@@ -14,7 +14,7 @@ import signal
 import threading
 from contextlib import contextmanager
 
-__all__ = ["Interrupted", "InterruptFlag", "deferred_interrupts"]
+__all__ = ["checkpoint_interrupted", "Interrupted", "InterruptFlag", "deferred_interrupts"]
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -58,3 +58,15 @@ def deferred_interrupts(note=None):
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
+
+
+def checkpoint_interrupted(exc: KeyboardInterrupt, save, note, step: int, last_checkpoint) -> None:
+    """What a training loop does when ``exc`` stops it: after a clean stop at a step boundary, write a
+    checkpoint with ``save()`` and say how to continue; after a second signal mid-step, only name the
+    last checkpoint. The caller re-raises ``exc``."""
+    if isinstance(exc, Interrupted) and not exc.clean:
+        note(f"stopped during step {step + 1}; the last checkpoint is {last_checkpoint}")
+        return
+    path = save()
+    note(f"interrupted at step {step}; saved {path}. Run the same command again to continue.")
+

@@ -37,7 +37,7 @@ from roomlight.model import Normalization, PanoVAE
 from roomlight.train import checkpoint as ck
 from roomlight.train.config import TrainConfig, config_differences
 from roomlight.train.distributed import all_reduce_mean, barrier, broadcast_flag, init_distributed
-from roomlight.train.interrupt import Interrupted, deferred_interrupts
+from roomlight.train.interrupt import Interrupted, checkpoint_interrupted, deferred_interrupts
 from roomlight.train.logger import RunLogger
 from roomlight.train.schedule import learning_rate
 
@@ -488,11 +488,7 @@ class Trainer:
                     raise Interrupted(signalled.signum or 2)  # at a step boundary: the state is consistent
         except KeyboardInterrupt as exc:
             bar.close()
-            if isinstance(exc, Interrupted) and not exc.clean:
-                self.note(f"stopped during step {self.step + 1}; the last checkpoint is {self.last_checkpoint}")
-                raise
-            path = self.save_checkpoint()
-            self.note(f"interrupted at step {self.step}; saved {path}. Run the same command again to continue.")
+            checkpoint_interrupted(exc, self.save_checkpoint, self.note, self.step, self.last_checkpoint)
             raise
         finally:
             bar.close()

@@ -37,7 +37,7 @@ from roomlight.losses import vae_loss
 from roomlight.model.view_encoder import ViewEncoder
 from roomlight.train import checkpoint as ck
 from roomlight.train.config import config_differences
-from roomlight.train.interrupt import Interrupted, deferred_interrupts
+from roomlight.train.interrupt import Interrupted, checkpoint_interrupted, deferred_interrupts
 from roomlight.train.schedule import learning_rate
 from roomlight.viewenc.config import RESUME_SAFE_FIELDS, ViewTrainConfig
 from roomlight.viewenc.views import training_view
@@ -335,10 +335,7 @@ class ViewEncoderTrainer:
                         raise Interrupted(signalled.signum)
             except KeyboardInterrupt as exc:
                 bar.close()
-                if isinstance(exc, Interrupted) and not exc.clean:
-                    raise
-                path = self.save_checkpoint()
-                self.note(f"interrupted at step {self.step}; saved {path}. Run the same command again to continue.")
+                checkpoint_interrupted(exc, self.save_checkpoint, self.note, self.step, self.last_checkpoint)
                 raise
             finally:
                 bar.close()
