@@ -46,7 +46,9 @@ GAP_STEPS = (("prior-ceiling", "oracle", "the prior's capacity: its best latent 
              ("prior-zero", "prior-ceiling", "the fit from z = 0 vs the prior's ceiling"),
              ("prior-view", "prior-ceiling", "the fit from the view encoder's start vs the prior's ceiling"),
              ("prior", "prior-ceiling", "the default fit vs the prior's ceiling"),
-             ("prior-view", "prior-samples", "the view encoder's start vs the paper's start"))
+             ("prior-view", "prior-samples", "the view encoder's start vs the paper's start"),
+             ("prior", "prior-samples", "the default start (the view encoder's, when the prior has one) vs the "
+                                        "paper's start"))
 MATERIAL_LABELS = {"albedo_rmse": "albedo RMSE ↓", "roughness_error": "roughness error ↓",
                    "metallic_error": "metallic error ↓"}
 _EXCLUDE = REFERENCES
