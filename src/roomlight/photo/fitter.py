@@ -164,7 +164,12 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
             light.z.copy_(z0.to(light.z.device))
             rad, depth = model.decode(z0[None].to(next(model.parameters()).device))
             rad, depth = rad[0].permute(1, 2, 0).cpu(), depth[0, 0].cpu()
-        if method == "prior":
+        if method == "prior" and start["init"] == "view":
+            # The view encoder decodes the room around the camera, in the photograph's metres: the
+            # camera is its centre. (Placing the scene anew would let it shrink the photograph into
+            # a patch of wall that fits its depths better: seen at 0.2x scale, 2 m off centre.)
+            transform, dirs = base, obs_room_dirs
+        elif method == "prior":
             repelled = np.concatenate([geometry.object_points, geometry.free_points])
             transform = place_scene(depth, base.rotation, geometry.frustum.points, repelled, config.margin,
                                     config.lambda_rep, config.placement_steps)
