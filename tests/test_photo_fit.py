@@ -189,3 +189,19 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
     for k in range(2):
         assert errors["prior"][k] < errors["prior-envmap"][k], errors
         assert errors["prior from the view"][k] < 0.5 * errors["prior"][k], errors
+
+
+def test_the_view_start_keeps_the_camera_at_the_room_centre(photo, prior, one_torch_thread):
+    """From the view encoder's start the decoded room is the camera's: no scale, no shift; from the
+    paper's start the scene is placed inside a random room."""
+    from roomlight.photo import fit_photo
+
+    _, case, _ = photo
+    assert prior.view_encoder is not None                       # the bundled prior ships one
+    cfg = _config(iterations=0, placement_steps=20, init_samples=2)
+    view = fit_photo(case, "prior", cfg, model=prior, progress=False)
+    assert view.initial["init"] == "view" and 0 < view.initial["seen_fraction"] < 0.5
+    assert view.transform.scale == 1.0 and not view.transform.translation.any()
+    samples = fit_photo(case, "prior", cfg.override(init="samples"), model=prior, progress=False)
+    assert samples.initial["init"] == "samples" and samples.transform.translation.any()
+    assert view.containment["free_space_outside_share"] == 0.0 and view.containment["objects_outside_share"] == 0.0
