@@ -292,9 +292,9 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
 
 def _containment_points(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig):
     """(free-space points, object points, per-point margin) in the room frame that a 2.5D light must
-    enclose: every pixel's free space up to ``free_space_fraction`` of its distance, and every object
-    vertex with ``margin`` to spare."""
-    free, objects = geometry.contained_points(config.free_space_fraction)
+    enclose: every pixel's free space up to the surface it sees, and every object vertex with ``margin``
+    to spare."""
+    free, objects = geometry.contained_points()
     free, objects = transform.points(free), transform.points(objects)
     margin = np.concatenate([np.zeros(len(free)), np.full(len(objects), float(config.margin))])
     return free, objects, margin

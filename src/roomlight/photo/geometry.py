@@ -117,13 +117,12 @@ class PhotoGeometry:
     def labels_present(self) -> list[int]:
         return [o.label for o in self.objects]
 
-    def contained_points(self, free_space_fraction: float) -> tuple[np.ndarray, np.ndarray]:
-        """What a 2.5D light must enclose (camera frame): (free-space points (N, 3): each pixel's point
-        at ``free_space_fraction`` of its distance, the farthest free space the pixel vouches for;
-        object points (K, 3): every vertex of every object's mesh)."""
-        free = self.pixel_points * free_space_fraction
+    def contained_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """What a 2.5D light must enclose (camera frame): (the point every pixel sees (N, 3), so the free
+        space in front of it and anything resting on it stay inside; object points (K, 3): every vertex of
+        every object's mesh)."""
         objects = np.concatenate([o.vertices for o in self.objects]) if self.objects else np.zeros((0, 3))
-        return free, objects
+        return self.pixel_points, objects
 
 
 def working_size(height: int, width: int, longest: int) -> tuple[int, int]:
