@@ -52,7 +52,7 @@ def test_without_adagn_the_latent_reaches_the_decoder_only_through_its_first_lay
 
 
 def test_without_latitude_channels_the_network_never_asks_for_them(monkeypatch):
-    import roomlight.model.panovae as pv
+    import roomlight.model.networks as pv
 
     def refuse(*a, **k):
         raise AssertionError("latitude channels requested")
