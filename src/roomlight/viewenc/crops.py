@@ -2,7 +2,7 @@
 
 A crop is a pinhole view from the panorama's capture point: horizontal field of view, aspect
 (width / height), pitch and roll (:func:`roomlight.photo.camera.camera_rotation`) and yaw (a turn
-about the vertical, positive towards +x... applied after pitch and roll). Its pixels look along
+about the vertical applied after them; see :func:`crop_rotation`). Its pixels look along
 the same directions as :func:`roomlight.geometry.projection.perspective_directions` with the
 camera's forward and up vectors, and carry the panorama's radiance and the camera-frame point at
 the panorama's radial depth, which is what a photograph with a depth map gives
