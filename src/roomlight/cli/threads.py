@@ -7,8 +7,9 @@ machine where anything else runs, from the other process; and torch sizes its po
 machine's cores, not the ones this process may run on (a container, ``taskset``, a batch slot).
 The policy, applied once when ``roomlight`` starts:
 
-- ``OMP_WAIT_POLICY=PASSIVE`` (and ``KMP_BLOCKTIME=0`` for Intel's OpenMP): idle threads sleep
-  at once. Set before torch is imported, unless the user already set it;
+- ``OMP_WAIT_POLICY=PASSIVE`` (and ``KMP_BLOCKTIME=0`` for Intel's OpenMP) when other processes keep
+  at least half a CPU busy: idle threads sleep at once. On an idle machine OpenMP keeps its short spin,
+  which is faster there. Set before torch is imported, unless the user already set it;
 - threads: ``--threads N``, else ``$ROOMLIGHT_THREADS``, else the CPUs this process may use
   (``os.sched_getaffinity``) less those other processes keep busy, measured over 50 ms when the
   program starts (``/proc/stat``), at least one; for torch and for Dr.Jit alike. A thread more
@@ -63,10 +64,19 @@ def measured_threads() -> int:
     return max(1, available_cpus() - int(busy_cpus() + 0.5))
 
 
-def prepare_environment() -> None:
-    """Passive waiting for OpenMP threads; must run before torch is imported to take effect."""
-    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-    os.environ.setdefault("KMP_BLOCKTIME", "0")
+#: Other processes keeping at least this many CPUs busy make OpenMP's threads sleep when idle.
+BUSY_THRESHOLD = 0.5
+
+
+def prepare_environment(busy: float | None = None) -> None:
+    """Passive waiting for OpenMP threads when other processes keep a CPU busy (``busy``: CPUs, measured
+    now by default); on an idle machine OpenMP keeps its short spin, which is faster there. Must run
+    before torch is imported to take effect; a value the user set is kept."""
+    if busy is None:
+        busy = busy_cpus()
+    if busy >= BUSY_THRESHOLD:
+        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+        os.environ.setdefault("KMP_BLOCKTIME", "0")
 
 
 def thread_count(option: int | None = None) -> int:
