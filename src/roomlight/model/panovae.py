@@ -61,6 +61,7 @@ class PanoVAE(nn.Module):
         # Held in a tuple so that it is not a sub-module: the prior's state_dict, checksum and
         # device stay its own (the view encoder always runs on the CPU).
         self._view_encoder: tuple = ()
+        self._weights_sha256: str | None = None
 
     @property
     def view_encoder(self):
@@ -198,7 +199,8 @@ class PanoVAE(nn.Module):
             model = cls._load_roomlight(directory)
             from roomlight.model.view_encoder import load_view_encoder_beside
 
-            model.set_view_encoder(load_view_encoder_beside(directory, model.config))
+            # the weights' checksum was verified while loading them: no second pass over the file
+            model.set_view_encoder(load_view_encoder_beside(directory, model.config, model._weights_sha256))
         elif (directory / "config.yaml").exists() or path.suffix == ".pth":
             from roomlight.model.convert import load_authors_run
 
@@ -236,5 +238,6 @@ class PanoVAE(nn.Module):
         model = cls(config, norm, metadata)
         # Checkpoints written before the checksum was recorded have none: they load unverified.
         state = load_weights_file(directory / WEIGHTS_NAME, sha256=sha)
+        model._weights_sha256 = sha  # verified above (None for checkpoints saved before checksums)
         load_state_dict_checked(model, state, str(directory / WEIGHTS_NAME))
         return model

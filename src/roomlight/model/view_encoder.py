@@ -152,9 +152,13 @@ class ViewEncoder(nn.Module):
         return net.eval()
 
 
-def load_view_encoder_beside(prior_dir, prior_config: ModelConfig) -> "ViewEncoder | None":
+def load_view_encoder_beside(prior_dir, prior_config: ModelConfig, prior_sha256: str | None = None
+                             ) -> "ViewEncoder | None":
     """The view encoder in ``prior_dir/view_encoder/``, or None when there is none or it was trained
-    for other prior weights (a warning says so: its latents would mean nothing to this decoder)."""
+    for other prior weights (a warning says so: its latents would mean nothing to this decoder).
+
+    ``prior_sha256``: the prior's weights checksum when the caller already verified it (the weights
+    file is hashed otherwise)."""
     import warnings
 
     folder = Path(prior_dir) / VIEW_ENCODER_DIR
@@ -162,7 +166,8 @@ def load_view_encoder_beside(prior_dir, prior_config: ModelConfig) -> "ViewEncod
         return None
     encoder = ViewEncoder.from_pretrained(folder, prior_config)
     weights = Path(prior_dir) / WEIGHTS_NAME
-    if encoder.prior_sha256 is not None and weights.exists() and file_sha256(weights) != encoder.prior_sha256:
+    if encoder.prior_sha256 is not None and weights.exists() and \
+            (prior_sha256 or file_sha256(weights)) != encoder.prior_sha256:
         warnings.warn(f"{folder}: trained for other prior weights than {weights}; not used "
                       "(retrain it with `roomlight train-view-encoder`)", stacklevel=2)
         return None
