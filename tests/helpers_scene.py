@@ -10,15 +10,18 @@ from roomlight.io import save_png, write_exr, write_panorama
 from roomlight.scene.description import parse_scene, save_scene
 
 
-def make_tiny_scene(root: Path, height: int = 16, res: int = 40, spp: int = 256, material: str = "diffuse"):
+def make_tiny_scene(root: Path, height: int = 16, res: int = 40, spp: int = 256, material: str = "diffuse",
+                    light=None):
     """Write a scene (two objects in the input view) whose target is rendered under the example
-    room's 2.5D area light; returns (scene, true radiance, true depth)."""
+    room's 2.5D area light, or under ``light`` = (radiance (h, 2h, 3), depth (h, 2h)) when given;
+    returns (scene, true radiance, true depth)."""
     from roomlight.render.scene import EmitterScene
     from roomlight.scene.build import view_objects
 
     root = Path(root)
     root.mkdir(parents=True, exist_ok=True)
-    rad, depth = example_room(height)
+    rad, depth = example_room(height) if light is None else (light[0].float(), light[1].float())
+    height = rad.shape[0]
     write_panorama(root / "gt.exr", (rad.numpy(), depth.numpy()), half=False)
     camera = {"origin": [0, 0, 0], "target": [0, -0.4, -1], "fov": 65, "width": res, "height": res}
     data = {

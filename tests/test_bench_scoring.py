@@ -152,7 +152,11 @@ def test_paired_differences_hand_computed(tmp_path):
     assert ang["mean"] == pytest.approx(0.5) and ang["wins"] == 1  # -1 (win) and +2 (loss)
     md = paths["markdown"].read_text()
     assert "| direct-envmap | Δ PSNR LDR (dB, ↑) | +15.00 [" in md and "2/2 ✓" in md
-    assert "Paired differences" in paths["html"].read_text()
+    page = paths["html"].read_text()
+    assert "Paired differences" in page
+    # the note that explains the cells comes once per page, however many paired tables there are
+    assert md.count("Cells: mean per-scene difference") == 1
+    assert page.count("Cells: mean per-scene difference") == 1
 
 
 def test_bootstrap_interval_matches_the_normal_approximation():

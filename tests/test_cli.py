@@ -120,15 +120,22 @@ def test_negative_radiance_needs_explicit_fix(tmp_path):
 @pytest.mark.mitsuba
 def test_demo_runs(tmp_path):
     r = run("demo", "--out", tmp_path / "demo", "--height", "16", "--res", "32", "--iterations", "4",
-            "--spp", "4", "--gt-spp", "8")
+            "--spp", "4", "--gt-spp", "8", "--room", "400201:diffuse", "--room", "400202:mirror")
     assert r.exit_code == 0, r.output
     for name in ("parallax/comparison.png", "parallax/probes_mesh.exr", "parallax/mesh/scene.xml",
-                 "report/index.html", "report/report.md", "summary.json", "panoramas/room.exr"):
+                 "report/index.html", "report/report.md", "summary.json", "rooms.md"):
         assert (tmp_path / "demo" / name).is_file(), name
     import json
 
     summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
     assert summary["methods"][-1] == "direct-envmap" and summary["methods"][0] in ("prior", "direct-al")
+    assert summary["materials"] == ["diffuse", "mirror"]
+    rows = (tmp_path / "demo" / "rooms.md").read_text().splitlines()
+    # header, rule, one row per room in its material, the mean
+    assert len(rows) == 5 and "| diffuse |" in rows[2] and "| mirror |" in rows[3] and rows[4].startswith("| **mean**")
+    assert "**mean**" in r.output
+    bad = run("demo", "--out", tmp_path / "bad", "--room", "400201:velvet")
+    assert bad.exit_code == 2 and "SEED:MATERIAL" in bad.output and not (tmp_path / "bad").exists()
 
 
 @pytest.mark.mitsuba

@@ -73,12 +73,21 @@ class BenchConfig(StrictConfig):
     spp: int = 256                                     #: samples per pixel of the ground-truth renders
     max_depth: int = 4                                 #: longest light path (prb integrator)
     materials: tuple[str, ...] = BENCH_MATERIALS       #: one scene per material
+    #: one scene per panorama instead, the k-th panorama (by name) in materials[k mod len]: a
+    #: benchmark that spreads its materials over more rooms for the same cost (the demo's)
+    material_per_panorama: bool = False
     shapes: tuple[str, ...] = ("knot", "spiky")        #: input-view shapes (2; more: two drawn per panorama)
     key: float = EXPOSURE_KEY                          #: exposure key (log-average luminance of the objects)
     box_range: tuple[float, float] = (0.25, 0.35)      #: screen box side, fraction of the frame width
     strata: tuple[tuple[float, float], ...] = STRATA   #: relative depth strata
     margin: float = 0.05                               #: clearance of objects to the emitter (fraction)
     supersample: int = 4                               #: mask rays per pixel along each axis
+
+    def for_panorama(self, index: int) -> "BenchConfig":
+        """The settings the ``index``-th panorama is built with: these, or with its one material."""
+        if not self.material_per_panorama:
+            return self
+        return self.override(materials=(self.materials[index % len(self.materials)],))
 
     def placement(self) -> PlacementConfig:
         return PlacementConfig(fov=self.fov, width=self.width, height=self.height, box_range=tuple(self.box_range),
@@ -292,25 +301,27 @@ def make_benchmark(panos, out_dir, config: BenchConfig | None = None, overwrite:
     if progress:
         from roomlight.progress import progress_bar
 
-        bar = progress_bar(total=len(files) * len(config.materials), desc="bench make", unit="scene")
+        per = 1 if config.material_per_panorama else len(config.materials)
+        bar = progress_bar(total=len(files) * per, desc="bench make", unit="scene")
     records = []
     try:
-        for f, name in zip(files, names, strict=True):
-            rec = None if overwrite else _done_record(out / name, config)
+        for index, (f, name) in enumerate(zip(files, names, strict=True)):
+            pconfig = config.for_panorama(index)
+            rec = None if overwrite else _done_record(out / name, pconfig)
             if rec is None:
                 if bar is not None:
                     bar.set_postfix_str(name)
                 try:
-                    rec = build_panorama(f, out, config, bar)
+                    rec = build_panorama(f, out, pconfig, bar)
                 except BaseException:
                     # Built panoramas stay (a re-run reuses them); the one that failed leaves nothing.
-                    if (out / name).is_dir() and _done_record(out / name, config) is None:
+                    if (out / name).is_dir() and _done_record(out / name, pconfig) is None:
                         shutil.rmtree(out / name, ignore_errors=True)
                     if created and not any(out.iterdir()):
                         out.rmdir()
                     raise
             elif bar is not None:
-                bar.update(len(config.materials))
+                bar.update(len(pconfig.materials))
             records.append(rec)
     finally:
         if bar is not None:

@@ -154,9 +154,6 @@ def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
              "<h2>Paired differences: the prior against each baseline (evaluation view)</h2>",
              md_table_to_html(paired_markdown(paired_differences(records, "prior", "eval"), "prior",
                                               ordered({r["material"] for r in records}, MATERIAL_ORDER))),
-             ("<p class='note'>Cells: mean per-scene difference prior − baseline [95 % bootstrap interval of the "
-              "mean] and the scenes the prior wins; ✓ interval entirely on the good side, ✗ entirely on the bad "
-              "side.</p>"),
              "<h2>Input view (fitted objects)</h2>", md_table_to_html(markdown_table(records, "input")),
              "<h2>Fit time</h2>", _timing_table(records), "<h2>Scenes</h2>"]
     for sid, p in sorted(figures.items()):

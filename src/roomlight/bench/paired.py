@@ -69,12 +69,14 @@ def _cell(s: dict, metric: str) -> str:
     return f"{s['mean']:+.{digits}f} [{lo:+.{digits}f}, {hi:+.{digits}f}] {s['wins']}/{s['n']}{mark}"
 
 
-def paired_markdown(paired: dict, method: str = "prior", materials=None, labels: dict | None = None) -> str:
+def paired_markdown(paired: dict, method: str = "prior", materials=None, labels: dict | None = None,
+                    note: bool = True) -> str:
     """Markdown table: one row per baseline x metric, one column per material.
 
     Each cell: mean difference ``method - baseline`` [95 % bootstrap interval] wins/scenes;
     ✓ marks an interval entirely on the good side, ✗ entirely on the bad side. ``labels``
     (``{metric: row label}``) gives the rows for other metrics than the benchmark's three.
+    ``note`` appends the line that explains the cells (once per page: False for later tables).
     """
     if not paired:
         return "_no paired scenes_\n"
@@ -87,7 +89,8 @@ def paired_markdown(paired: dict, method: str = "prior", materials=None, labels:
         for metric in labels:
             cells = [_cell(mats[mat][metric], metric) if metric in mats.get(mat, {}) else "–" for mat in materials]
             lines.append(f"| {base} | {labels[metric]} | " + " | ".join(cells) + " |")
-    lines += ["", f"Cells: mean per-scene difference {method} − baseline [95 % bootstrap interval of the mean, "
-              f"{RESAMPLES} resamples] and the scenes {method} wins; ✓ interval entirely on the good side, "
-              "✗ entirely on the bad side."]
+    if note:
+        lines += ["", f"Cells: mean per-scene difference {method} − baseline [95 % bootstrap interval of the mean, "
+                  f"{RESAMPLES} resamples] and the scenes {method} wins; ✓ interval entirely on the good side, "
+                  "✗ entirely on the bad side."]
     return "\n".join(lines) + "\n"

@@ -145,7 +145,7 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
           paired_markdown(summary["paired"]["eval"], "prior", summary["materials"]),
           "## Input view (fitted objects) — supplementary fitted-view table", "", markdown_table(records, "input"),
           "## Paired differences, input view", "",
-          paired_markdown(summary["paired"]["input"], "prior", summary["materials"]),
+          paired_markdown(summary["paired"]["input"], "prior", summary["materials"], note=False),
           "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
     for m in ordered(timing, METHOD_ORDER):
         md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")

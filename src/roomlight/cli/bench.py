@@ -58,9 +58,13 @@ def command():
               help="Comma-separated input-view shapes: built-in names or .ply/.obj files; more than two: "
                    f"two are drawn per panorama [default: {','.join(BenchConfig.shapes)}].")
 @click.option("--key", type=float, default=None, help=f"Exposure key: objects' log-average luminance {default_of(BenchConfig, 'key')}.")
+@click.option("--one-material-each", "material_per_panorama", is_flag=True, default=None,
+              help="One scene per panorama, the materials in turn (panorama k, sorted by name, gets material k mod "
+                   "their number), instead of one per panorama and material.")
 @click.option("--overwrite", is_flag=True, help="Rebuild panoramas that are already built.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, materials, shapes, key, overwrite, quiet):
+def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, materials, shapes, key, material_per_panorama,
+         overwrite, quiet):
     """Build benchmark scenes from the panoramas in --panos (one per panorama and material).
 
     Writes OUT/<panorama>/<material>/scene.json with the ground-truth emitter, linear EXR and
@@ -74,10 +78,15 @@ def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, material
         cfg = cfg.override(**PAPER_MAKE)
     height, width = res if res else (None, None)
     cfg = cfg.override(emitter_height=emitter_height, width=width, height=height, spp=spp, fov=fov,
-                       materials=_csv(materials), shapes=_csv(shapes), key=key)
+                       materials=_csv(materials), shapes=_csv(shapes), key=key,
+                       material_per_panorama=material_per_panorama or None)
     manifest = make_benchmark(panos, out_dir, cfg, overwrite=overwrite, progress=not quiet)
-    click.echo(f"{len(manifest['panoramas'])} panoramas x {len(cfg.materials)} materials = "
-               f"{len(manifest['scenes'])} scenes -> {out_dir}")
+    if cfg.material_per_panorama:
+        click.echo(f"{len(manifest['panoramas'])} panoramas, one material each ({', '.join(cfg.materials)} in turn) = "
+                   f"{len(manifest['scenes'])} scenes -> {out_dir}")
+    else:
+        click.echo(f"{len(manifest['panoramas'])} panoramas x {len(cfg.materials)} materials = "
+                   f"{len(manifest['scenes'])} scenes -> {out_dir}")
 
 
 @command.command("run")

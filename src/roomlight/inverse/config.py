@@ -43,6 +43,10 @@ class FitConfig(StrictConfig):
     sphere_margin: float = 0.2            #: sphere proxy = enclosing radius x (1 + this)
     z_prior: float = 0.0                  #: weight of a Gaussian prior 0.5 |z|^2 on the latent
     fit_depth_scale: bool = False         #: also fit a global log scale of the decoded depth
+    #: prior methods: fit a white balance c (sum 0) beside the exposure, gain exp(s + c); False is
+    #: the paper's scalar exposure
+    white_balance: bool = False
+    white_balance_weight: float = 0.03    #: weight w of the pull to neutral, w |c|^2
     pixel_subset: float = 1.0             #: fraction of object pixels in the loss each step
     eval_every: int = 10                  #: best-iterate check period (fixed-seed re-evaluation)
     eval_spp: int | None = None           #: spp of the best-iterate check (default: spp)
@@ -51,6 +55,8 @@ class FitConfig(StrictConfig):
     image: str = "ldr"                    #: target: 'ldr' (8-bit recording) or 'hdr' (linear EXR)
 
     def __post_init__(self) -> None:
+        if not self.white_balance_weight >= 0:
+            raise RoomlightError(f"fit setting white_balance_weight must be >= 0, not {self.white_balance_weight!r}")
         if self.repulsion_objects not in REPULSION_OBJECTS:
             raise RoomlightError(f"fit setting repulsion_objects must be one of {', '.join(REPULSION_OBJECTS)}, "
                                  f"not {self.repulsion_objects!r}")

@@ -6,8 +6,9 @@ regularisers. The fitting loop (:mod:`roomlight.inverse.fitter`) does not know w
 
 - :class:`PriorLight`: z in R^latent (init 0) and log-exposure s (init log 0.18), decoded by
   a frozen PanoVAE decoder; shown as the 2.5D area light (``prior``) or at infinity
-  (``prior-envmap``). Optionally a Gaussian prior on z, a fitted global depth scale and a floor
-  under the depth that keeps given points inside the light.
+  (``prior-envmap``). Optionally a white balance c beside the exposure (per-channel gain
+  exp(s + c), sum c = 0, a weak pull to neutral), a Gaussian prior on z, a fitted global depth
+  scale and a floor under the depth that keeps given points inside the light.
 - :class:`DirectLight`: free log-radiance (and, for the 2.5D light, log-depth) maps at
   128 x 256 with the smoothness prior (the paper's "Smoothness" baselines).
 """
@@ -58,10 +59,23 @@ class LightModel(torch.nn.Module):
 
 
 class PriorLight(LightModel):
-    """The paper's method: optimise (z, s) through a frozen decoder."""
+    """The paper's method: optimise (z, s) through a frozen decoder.
+
+    Args:
+        model: the prior (a PanoVAE; frozen here).
+        envmap: show the radiance at infinity (``prior-envmap``) instead of as the 2.5D light.
+        init_exposure: e^s at the start.
+        z_prior: weight of 0.5 |z|^2.
+        fit_depth_scale: also fit a global log scale of the decoded depth.
+        white_balance: weight w of the pull to neutral of a white balance c in R^3 fitted beside
+            the exposure, or None for the paper's scalar exposure. The radiance is multiplied by
+            the per-channel gain exp(s + c) with c centred (sum c = 0, so s alone sets the level)
+            and the regulariser w |c|^2 added: the light's colour can follow the observations
+            without the latent moving the room's layout to change it.
+    """
 
     def __init__(self, model, envmap: bool = False, init_exposure: float = 0.18, z_prior: float = 0.0,
-                 fit_depth_scale: bool = False):
+                 fit_depth_scale: bool = False, white_balance: float | None = None):
         super().__init__()
         self.model = model.eval()
         for p in self.model.parameters():
@@ -71,6 +85,11 @@ class PriorLight(LightModel):
         self.z = torch.nn.Parameter(torch.zeros(latent))
         self.s = torch.nn.Parameter(torch.tensor(math.log(init_exposure)))
         self.log_depth_scale = torch.nn.Parameter(torch.zeros(())) if fit_depth_scale else None
+        if white_balance is not None and not white_balance >= 0:
+            raise ValueError(f"white_balance weight must be >= 0 or None, got {white_balance}")
+        #: raw white balance (3,); only its centred part acts (:meth:`log_white_balance`)
+        self.c = torch.nn.Parameter(torch.zeros(3)) if white_balance is not None else None
+        self.white_balance = white_balance
         self.z_prior = z_prior
         #: (H, W) floor under the decoded depth (:mod:`roomlight.inverse.floor`), or None. A plain
         #: attribute, not a buffer: it belongs to the fit's scene, not to the light's state.
@@ -80,9 +99,18 @@ class PriorLight(LightModel):
     def resolution(self) -> tuple[int, int]:
         return tuple(self.model.config.resolution)
 
+    def log_white_balance(self) -> torch.Tensor | None:
+        """c - mean(c): (3,) log per-channel gains summing to 0, or None without a white balance."""
+        return None if self.c is None else self.c - self.c.mean()
+
+    def log_gain(self) -> torch.Tensor:
+        """(3,) log of the per-channel gain applied to the decoded radiance: s (+ c)."""
+        c = self.log_white_balance()
+        return self.s.expand(3) if c is None else self.s + c
+
     def emitter(self):
         rad, depth = self.model.decode(self.z[None])
-        rad = rad[0].permute(1, 2, 0) * torch.exp(self.s)
+        rad = rad[0].permute(1, 2, 0) * torch.exp(self.log_gain())
         if self.kind == "envmap":
             return rad, None
         d = depth[0, 0]
@@ -91,12 +119,20 @@ class PriorLight(LightModel):
         return rad, apply_floor(d, self.depth_floor)
 
     def regularizers(self):
+        terms = {}
         if self.z_prior > 0:
-            return {"z_prior": self.z_prior * 0.5 * self.z.square().sum()}
-        return {}
+            terms["z_prior"] = self.z_prior * 0.5 * self.z.square().sum()
+        c = self.log_white_balance()
+        if c is not None and self.white_balance > 0:
+            terms["white_balance"] = self.white_balance * c.square().sum()
+        return terms
 
     def describe(self):
         d = {"exposure": float(torch.exp(self.s.detach())), "z_norm": float(self.z.detach().norm())}
+        c = self.log_white_balance()
+        if c is not None:
+            d["white_balance"] = [round(float(v), 6) for v in torch.exp(c.detach())]
+            d["gain"] = [float(v) for v in torch.exp(self.log_gain().detach())]
         if self.log_depth_scale is not None:
             d["depth_scale"] = float(torch.exp(self.log_depth_scale.detach()))
         return d

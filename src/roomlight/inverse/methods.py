@@ -1,7 +1,7 @@
 """The fitting methods by name, and ``fit_scene`` which runs one on a scene description.
 
 =================  ======================================================================
-``prior``          z + log-exposure through the 2.5D area light (the paper's method)
+``prior``          z + log-exposure (+ white balance) through the 2.5D area light (the paper's method)
 ``prior-envmap``   the same prior, its radiance shown at infinity (env-map-prior comparison)
 ``direct-al``      free log radiance + log depth, 2.5D area light, smoothness prior
 ``direct-sphere``  free log radiance on a sphere proxy enclosing all objects (+20 %)
@@ -52,7 +52,8 @@ def make_light(method: str, scene, config: FitConfig, model=None) -> LightModel:
         if model is None:
             raise RoomlightError(f"method {method!r} needs a trained prior: pass --model RUN_OR_CHECKPOINT")
         return PriorLight(model, envmap=method == "prior-envmap", init_exposure=config.init_exposure,
-                          z_prior=config.z_prior, fit_depth_scale=config.fit_depth_scale)
+                          z_prior=config.z_prior, fit_depth_scale=config.fit_depth_scale,
+                          white_balance=config.white_balance_weight if config.white_balance else None)
     radius = enclosing_sphere_radius(scene, config.sphere_margin)
     kind = {"direct-al": "mesh", "direct-sphere": f"sphere:{radius:.6g}", "direct-envmap": "envmap"}[method]
     return DirectLight(kind, config.direct_resolution, init_radiance=config.init_exposure, init_depth=radius,

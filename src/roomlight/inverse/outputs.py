@@ -108,7 +108,8 @@ def write_fit_outputs(out: Path, result, fitter, target: torch.Tensor, mask: tor
     save_png(paths["preview"], strip)
     summary = {"method": result.method, "emitter_kind": result.emitter_kind, "best_iteration": result.best_iteration,
                "best_fixed_seed_loss": result.best_loss, "seconds": round(result.seconds, 3),
-               "nonfinite_steps": result.nonfinite_steps, "light": light_summary(rad), "config": result.config,
+               "nonfinite_steps": result.nonfinite_steps, "light": light_summary(rad),
+               "light_parameters": fitter.light.describe(), "config": result.config,
                "files": {k: str(v.relative_to(out)) for k, v in paths.items()}}
     paths["result"] = out / "result.json"
     paths["result"].write_text(json.dumps(summary, indent=2))

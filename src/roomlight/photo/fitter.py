@@ -150,7 +150,7 @@ class PhotoFit:
 
 def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig, model, case) -> tuple:
     """(light model, scene transform, description of the start) of ``method``."""
-    from roomlight.photo.placement import matching_log_exposure, place_scene
+    from roomlight.photo.placement import matching_log_exposure, matching_white_balance, place_scene
     from roomlight.photo.start import start_latent
 
     base = level_transform(case)
@@ -159,7 +159,8 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
         if model is None:
             raise RoomlightError(f"method {method!r} needs a trained prior (--model)")
         z0, start = start_latent(config.init, model, case, config)
-        light = PriorLight(model, envmap=method == "prior-envmap", init_exposure=1.0, z_prior=config.z_prior)
+        light = PriorLight(model, envmap=method == "prior-envmap", init_exposure=1.0, z_prior=config.z_prior,
+                           white_balance=config.white_balance_weight if config.white_balance else None)
         with torch.no_grad():
             light.z.copy_(z0.to(light.z.device))
             rad, depth = model.decode(z0[None].to(next(model.parameters()).device))
@@ -180,6 +181,11 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
         with torch.no_grad():
             light.s.fill_(s0)
         info = {**start, "z_norm": float(z0.norm()), "exposure": math.exp(s0)}
+        if light.c is not None:  # the colour of the background the camera sees, as the level is its brightness
+            c0 = matching_white_balance(rad, dirs, geometry.frustum.radiance, config.tau)
+            with torch.no_grad():
+                light.c.copy_(torch.as_tensor(c0, dtype=light.c.dtype))
+            info["white_balance"] = [round(float(v), 6) for v in np.exp(c0)]
         return light, transform, info
     if method == "direct-envmap":
         from roomlight.color import log_average_np

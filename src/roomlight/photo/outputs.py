@@ -134,6 +134,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "objective": {k: float(v) for k, v in fit.objective.items()},
         "best_iteration": r.best_iteration, "best_fixed_seed_loss": r.best_loss, "nonfinite_steps": r.nonfinite_steps,
         "light": light_summary(r.radiance),
+        "light_parameters": fit.model.light_model.describe(),
         "materials": materials,
         "objects": objects,
         "camera": {"intrinsics_input": case.intrinsics.to_dict(), "input_size": [case.height, case.width],

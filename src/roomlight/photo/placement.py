@@ -96,3 +96,24 @@ def matching_log_exposure(radiance: torch.Tensor, directions, observed, tau: flo
     y_obs = luminance_np(obs[keep].numpy().astype(np.float64))
     y_em = luminance_np(emitted.numpy().astype(np.float64))
     return float(np.log(y_obs + LOG_EPS).mean() - np.log(y_em + LOG_EPS).mean())
+
+
+#: Largest |c_k| of a starting white balance: a factor of e^0.5 = 1.65 between a channel and the mean.
+MAX_START_WHITE_BALANCE = 0.5
+
+
+def matching_white_balance(radiance: torch.Tensor, directions, observed, tau: float = 0.99) -> np.ndarray:
+    """(3,) centred log gains that give the emitter (H, W, 3), sampled in ``directions`` (N, 3), the
+    colour of the observed (N, 3) radiance there: per channel, log-average observed minus
+    log-average emitted, minus their mean (so the level stays the exposure's), clipped to
+    +-:data:`MAX_START_WHITE_BALANCE`. Zeros when nothing unsaturated is observed."""
+    obs = torch.as_tensor(observed, dtype=torch.float32)
+    dirs = torch.as_tensor(directions, dtype=torch.float32)
+    keep = obs.amax(-1) < tau
+    if not bool(keep.any()):
+        return np.zeros(3)
+    emitted = sample_equirect(radiance.detach().float().cpu().permute(2, 0, 1)[None], dirs[keep])[0].T
+    o = np.log(obs[keep].numpy().astype(np.float64) + LOG_EPS).mean(0)
+    e = np.log(emitted.numpy().astype(np.float64) + LOG_EPS).mean(0)
+    c = (o - e) - (o - e).mean()
+    return np.clip(c, -MAX_START_WHITE_BALANCE, MAX_START_WHITE_BALANCE)

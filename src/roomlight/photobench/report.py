@@ -202,7 +202,7 @@ def _gap_markdown(gap: list[dict], materials) -> list[str]:
           "its best approximation by the prior given the whole room.", ""]
     for step in gap:
         md += [f"**{step['method']} − {step['reference']}**: {step['what']}.", "",
-               paired_markdown(step["paired"], step["method"], materials)]
+               paired_markdown(step["paired"], step["method"], materials, note=False)]
     return md
 
 
@@ -230,7 +230,8 @@ def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(
           *_outside_markdown(outside or {}),
           "## Recovered materials (mean error over each photo's objects)", "", materials_table(mats),
           "## Paired differences on the materials", "",
-          paired_markdown(paired_mat, "prior", ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()}),
+          paired_markdown(paired_mat, "prior", ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()},
+                          note=False),
           "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
     for m in ordered(timing, PHOTO_METHOD_ORDER):
         md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")
@@ -311,7 +312,7 @@ def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures
              "<h2>Recovered materials</h2>", md_table_to_html(materials_table(mats)),
              "<h2>Paired differences on the materials</h2>",
              md_table_to_html(paired_markdown(paired_mat, "prior", ["objects"],
-                                              {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()})),
+                                              {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()}, note=False)),
              "<h2>Fit time</h2>"]
     rows = "".join(f"<tr><td>{html.escape(m)}</td><td>{timing[m]['mean_fit_seconds']:.1f}</td>"
                    f"<td>{timing[m]['cases']}</td></tr>" for m in ordered(timing, PHOTO_METHOD_ORDER))

@@ -34,6 +34,7 @@ from roomlight.data import (PackedCache, PanoramaDataset, ResumableBatchSampler,
 from roomlight.errors import RoomlightError
 from roomlight.losses import vae_loss
 from roomlight.model import Normalization, PanoVAE
+from roomlight.model.grow import can_grow, grow_latent_state
 from roomlight.train import checkpoint as ck
 from roomlight.train.config import TrainConfig, config_differences
 from roomlight.train.distributed import all_reduce_mean, barrier, broadcast_flag, init_distributed
@@ -180,7 +181,13 @@ class Trainer:
         torch.manual_seed(cfg.seed)  # identical initial weights on every rank and every fresh run
         self.model = PanoVAE(cfg.model_config, norm, {"depth_units": cfg.depth_units, "source": "roomlight train"})
         if source is not None:  # a resumed run overwrites these with its checkpoint's weights
-            self.model.load_state_dict(source.state_dict())
+            state = source.state_dict()
+            if source.config != self.model.config:  # a larger latent (checked by _init_source)
+                gen = torch.Generator().manual_seed(cfg.seed * 7919 + 303)
+                state = grow_latent_state(state, source.config, self.model.config, generator=gen)
+                self.note(f"grew the latent from {source.config.latent_dim} to {self.model.config.latent_dim} "
+                          f"dimensions; the network starts out computing what {cfg.init_from} computes")
+            self.model.load_state_dict(state)
         self.model.to(self.device)
         cuda = self.device.type == "cuda"
         self.amp = cfg.amp == "bf16" or (cfg.amp == "auto" and cuda)
@@ -204,10 +211,11 @@ class Trainer:
         from roomlight.model.runs import load_run_model
 
         source = load_run_model(self.cfg.init_from, device="cpu")
-        if source.config != self.cfg.model_config:
+        if source.config != self.cfg.model_config and not can_grow(source.config, self.cfg.model_config):
             raise RoomlightError(
                 f"init_from {self.cfg.init_from}: its architecture differs from the {self.cfg.model!r} preset "
-                f"this run trains; pass the preset it was trained with (--config)")
+                f"this run trains; pass the preset it was trained with (--config), changing at most a larger "
+                f"latent_dim (--set model_overrides.latent_dim=N)")
         if source.normalization is None:
             raise RoomlightError(f"init_from {self.cfg.init_from}: the model has no normalisation statistics")
         return source
