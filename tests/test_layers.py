@@ -24,6 +24,7 @@ LAYERS = [
     ["viewer"],
     ["photobench"],
     ["export"],
+    ["insert"],
     ["eval", "bench", "synth", "prepare"],
     ["photo"],
     ["inverse", "data"],

@@ -38,6 +38,7 @@ def cli(threads, deterministic):
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
       roomlight fit-photo IMAGE --out DIR   light + materials from one photograph
+      roomlight insert FIT --object NAME --at X,Y --out c.png   objects into the fitted photograph
       roomlight bench make|run|report      the synthetic benchmark
       roomlight view PATH --out page.html  an interactive viewer of a 2.5D light
       roomlight export PATH --out light.glb   the light for Blender / three.js / USD
@@ -52,10 +53,10 @@ def cli(threads, deterministic):
 
 def _register():
     from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, experiment, export, fit, fit_pano,
-                               fit_photo, info, prepare, render, sample, synth, train, train_view_encoder, view)
+                               fit_photo, info, insert, prepare, render, sample, synth, train, train_view_encoder, view)
 
     for mod in (info, emitter, render, synth, prepare, data, train, train_view_encoder, fit_pano, eval_prior, sample, convert, fit,
-                fit_photo, bench, demo, view, export, experiment):
+                fit_photo, insert, bench, demo, view, export, experiment):
         cli.add_command(mod.command)
 
 

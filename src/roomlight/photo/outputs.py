@@ -125,6 +125,11 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
     paths["loss"] = atomic_write(out / "loss.png", lambda p: plot_history(r.history, p, title=f"fit-photo {fit.method}"))
     paths["objects"] = atomic_write(out / "objects.ply", lambda p: _write_objects(p, fit))
 
+    # Absolute paths: the folder may be used from elsewhere later (``roomlight insert``).
+    inputs = {k: str(Path(v).resolve()) if Path(v).exists() else v for k, v in case.files.items()}
+    if "depth" not in inputs:  # estimated from the image: keep it, so the fit can be used later (insertion)
+        paths["depth"] = atomic_write(out / "depth_estimated.npy", lambda p: np.save(p, case.depth.astype(np.float32)))
+        inputs["depth"] = str(paths["depth"].resolve())
     g = fit.geometry
     objects = [{"label": o.label, "mesh_vertices": len(o.vertices), "mesh_triangles": len(o.faces),
                 "fitted_pixels": pixels[o.label]} for o in g.objects]
@@ -143,7 +148,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "transform": fit.transform.to_dict(),
         "initial": fit.initial,
         "containment": fit.containment,
-        "inputs": case.files,
+        "inputs": inputs,
         "settings": config.to_dict(),
         "timings": timings,
         "notes": list(case.notes),

@@ -1,0 +1,154 @@
+"""roomlight insert: placement on the photograph's surfaces, differential rendering, files and errors.
+
+The references are independent of the compositing code: inserting nothing must give back the
+photograph to float precision (the identity of differential rendering), and a diffuse object in a
+room of uniform radiance L must shade at albedo x L (the furnace: every direction it sees has
+radiance L, or a surface reflecting it)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+from click.testing import CliRunner
+
+from roomlight.cli.main import cli
+from roomlight.errors import RoomlightError
+from roomlight.insert import InsertSpec, insert_objects, load_fitted_photo, parse_material, place_object
+from roomlight.insert.objects import surface_at_pixel
+
+pytestmark = [pytest.mark.usefixtures("one_torch_thread")]
+
+
+def run(*args):
+    return CliRunner().invoke(cli, [str(a) for a in args], catch_exceptions=False)
+
+
+# ------------------------------------------------------------------------------------- placement
+def test_materials_parse_or_fail_with_the_forms():
+    assert parse_material("mirror")["type"] == "conductor"
+    assert parse_material("diffuse:0.8,0.2,0.1")["reflectance"]["value"] == [0.8, 0.2, 0.1]
+    assert parse_material("diffuse:0.5")["reflectance"]["value"] == [0.5, 0.5, 0.5]
+    p = parse_material("principled:0.7,0.3,1")
+    assert p["type"] == "principled" and p["roughness"] == pytest.approx(0.3)
+    for bad in ("velvet", "diffuse:", "diffuse:1,2,3", "diffuse:a,b,c", "principled:0.5,0.5", "diffuse:0.1,0.2"):
+        with pytest.raises(RoomlightError, match="material|diffuse|principled"):
+            parse_material(bad)
+
+
+def _plane_points(h=20, w=30, height=-1.0):
+    """(h, w, 3) camera-frame points of a floor y = ``height`` seen by a camera pitched down 10 degrees."""
+    from roomlight.photo.camera import Intrinsics, camera_rotation
+
+    k = Intrinsics.from_fov(60.0, w, h)
+    rays = k.pixel_rays() @ camera_rotation(-10.0, 0.0).T   # room frame
+    t = height / rays[..., 1]
+    pts = rays * t[..., None]
+    pts[t <= 0] = np.nan                                     # above the horizon: no floor
+    return pts @ camera_rotation(-10.0, 0.0), camera_rotation(-10.0, 0.0)  # back to the camera frame
+
+
+def test_an_object_rests_on_the_surface_along_its_normal():
+    pts, rot = _plane_points()
+    up_cam = rot.T @ np.array([0.0, 1.0, 0.0])
+    point, normal = surface_at_pixel(pts, 15, 15)
+    np.testing.assert_allclose(normal, up_cam, atol=1e-6)   # the floor's normal is the room's up
+    placed = place_object(InsertSpec("sphere", at=(15, 15), scale=0.4, material="mirror"), pts, up_cam)
+    heights = (placed.vertices - point) @ normal
+    assert heights.min() == pytest.approx(0.0, abs=2e-3)     # touching, a hair above
+    assert heights.max() == pytest.approx(0.4, abs=5e-3)     # its size along the normal
+    centre = placed.vertices.mean(0)
+    # straight above the point: the offset from it is along the normal only
+    np.testing.assert_allclose(centre - point - ((centre - point) @ normal) * normal, 0, atol=5e-3)
+    with pytest.raises(RoomlightError, match="no depth"):
+        surface_at_pixel(pts, 15, 0)                         # above the horizon
+    with pytest.raises(RoomlightError, match="outside"):
+        surface_at_pixel(pts, 30, 5)
+
+
+# ------------------------------------------------------------------------------- a fitted photo
+@pytest.fixture(scope="module")
+def fitted_dir(tmp_path_factory):
+    """A fit-photo output folder from a short fit of a tiny rendered photo case."""
+    from helpers_photo import bright_wall_room, make_tiny_photo
+
+    root = tmp_path_factory.mktemp("insert")
+    rad, depth = bright_wall_room(16)
+    make_tiny_photo(root / "case", rad, depth, size=(24, 32), spp=32, key=None)
+    out = root / "fit"
+    r = run("fit-photo", root / "case", "--out", out, "--preset", "fast", "--iterations", 2, "--spp", 2, "--quiet",
+            "--compare", "direct-envmap", "--set", "probe_count=1", "--set", "probe_spp=4",
+            "--set", "probe_resolution=16", "--set", "init_samples=2", "--set", "placement_steps=10")
+    assert r.exit_code == 0, r.output
+    return out
+
+
+@pytest.mark.mitsuba
+def test_inserting_nothing_gives_back_the_photograph(fitted_dir):
+    fitted = load_fitted_photo(fitted_dir)
+    res = insert_objects(fitted, [], size=32, spp=8)
+    assert res.composite.shape == res.photo.shape == (24, 32, 3)
+    np.testing.assert_array_equal(res.composite, np.maximum(res.photo, 0))
+    assert float(res.coverage.max()) == 0.0 and np.all(res.shadow == 1.0)
+
+
+@pytest.mark.mitsuba
+def test_the_command_writes_the_composite_and_refuses_bad_input_in_one_line(fitted_dir, tmp_path):
+    out = tmp_path / "ins" / "composite.png"
+    r = run("insert", fitted_dir, "--object", "blob", "--at", "16,20", "--material", "diffuse:0.9,0.2,0.2",
+            "--size", "32", "--spp", "8", "--out", out)
+    assert r.exit_code == 0, r.output
+    for name in ("composite.png", "composite.exr", "object_mask.png", "shadow.png", "insert.json"):
+        assert (out.parent / name).is_file(), name
+    info = json.loads((out.parent / "insert.json").read_text())
+    assert info["light"] == "prior" and len(info["objects"]) == 1 and info["size"] == [24, 32]
+    from PIL import Image
+
+    mask = np.asarray(Image.open(out.parent / "object_mask.png"))
+    assert mask.max() == 255 and (mask > 0).sum() >= 4     # the object is in the picture
+    # the same under a compared light, from a placements file
+    places = tmp_path / "objects.json"
+    places.write_text(json.dumps([{"object": "sphere", "at": [10, 20], "material": "mirror", "scale": 0.2}]))
+    r = run("insert", fitted_dir, "--placements", places, "--light", "direct-envmap", "--size", "32", "--spp", "4",
+            "--out", tmp_path / "env" / "c.png")
+    assert r.exit_code == 0, r.output
+    assert json.loads((tmp_path / "env" / "insert.json").read_text())["light_kind"] == "envmap"
+    bad_mesh = tmp_path / "broken.obj"
+    bad_mesh.write_text("v 0 0 0\nf 1 2 oops\n")
+    for args, needle in [(["--at", "100,5"], "outside"), (["--at", "16,-3"], "outside"),
+                         (["--object", str(bad_mesh), "--at", "16,20"], "broken.obj"),
+                         (["--object", "nothing.ply", "--at", "16,20"], "no such mesh"),
+                         (["--at", "16,20", "--material", "velvet"], "material"),
+                         (["--light", "oracle", "--at", "16,20"], "no such fitted light"),
+                         ([], "nothing to insert")]:
+        r = CliRunner().invoke(cli, ["insert", str(fitted_dir), *args, "--out", str(tmp_path / "x.png")])
+        assert r.exit_code != 0, args
+        assert needle in r.output and "Traceback" not in r.output, (args, r.output)
+        assert len(r.output.strip().splitlines()) <= 2, r.output
+
+
+@pytest.mark.mitsuba
+def test_a_diffuse_object_in_a_room_of_uniform_radiance_shades_at_albedo_times_radiance(fitted_dir):
+    """The fitted light replaced by a uniform room of radiance L (a white furnace): the inserted
+    diffuse sphere's pixels in the composite are albedo x L."""
+    fitted = load_fitted_photo(fitted_dir)
+    L, albedo = 0.6, 0.5
+    h, w = fitted.radiance.shape[:2]
+    # The room's surfaces well outside the depth mesh, so the local scene sits inside the light.
+    from roomlight.examples import example_room
+
+    _, room_depth = example_room(h)
+    fitted.radiance = torch.full((h, w, 3), L)
+    fitted.depth = room_depth * 3.0
+    # A photograph of that room, whose fitted objects are white too: every pixel shows radiance L.
+    fitted.case.image = np.full_like(fitted.case.image, L)
+    white = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}}
+    fitted.bsdfs = lambda: {lab: white for lab in fitted.materials}
+    res = insert_objects(fitted, [InsertSpec("sphere", at=(16, 21), scale=0.35, material=f"diffuse:{albedo}")],
+                         size=32, spp=512, seed=3)
+    inside = res.coverage > 0.99
+    assert inside.sum() >= 6, inside.sum()
+    shade = res.composite[inside].mean(0)
+    np.testing.assert_allclose(shade, albedo * L, rtol=0.05)
