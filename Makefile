@@ -8,7 +8,7 @@ PY     := $(VENV)/bin/python
 TORCH_SPEC ?= $(shell if command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi -L >/dev/null 2>&1; then echo "torch"; else echo "torch==2.13.0"; fi)
 STAMP  := $(VENV)/.roomlight-installed
 
-.PHONY: all setup web demo test test-fast bench clean info
+.PHONY: all setup web blender demo test test-fast bench clean info
 
 all: test
 
@@ -17,6 +17,10 @@ setup: $(STAMP) web
 # three.js (npm, pinned) for `roomlight view`, Chromium for the browser tests; checked on every run
 web:
 	@scripts/ensure_web.sh
+
+# Blender as a Python module in .venv-blender (bpy pins numpy 1.x) for the Blender export test
+blender:
+	@scripts/ensure_blender.sh
 
 $(STAMP): pyproject.toml scripts/ensure_llvm.sh
 	@scripts/ensure_llvm.sh
@@ -32,7 +36,7 @@ info: $(STAMP)
 demo: $(STAMP)
 	@$(VENV)/bin/roomlight demo
 
-test: $(STAMP) web
+test: $(STAMP) web blender
 	@$(PY) -m pytest -q
 
 test-fast: $(STAMP) web
@@ -42,4 +46,4 @@ bench: $(STAMP)
 	@for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) build src/*.egg-info .pytest_cache roomlight-demo
+	rm -rf $(VENV) .venv-blender build src/*.egg-info .pytest_cache roomlight-demo

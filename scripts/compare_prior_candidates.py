@@ -59,16 +59,16 @@ def measure_rates(names: list[str], path: Path) -> dict[str, float]:
 
     rates = json.loads(path.read_text()) if path.exists() else {}
     for name in names:
-        if name in rates:
-            continue
         preset, overrides, _, _ = CANDIDATES[name]
-        torch.manual_seed(0)
-        norm = Normalization(torch.tensor([0.95, 0.76, 0.61, 0.61]), torch.tensor([0.64, 0.60, 0.59, 0.52]))
-        model = PanoVAE(get_preset(preset).override(**overrides), normalization=norm)
-        rates[name] = training_rate(model, repeats=4, batch=BATCH)
-        print(f"{name}: {rates[name]:.1f} training panoramas/s", flush=True)
-        path.write_text(json.dumps(rates, indent=2) + "\n")
-    return rates
+        arch = json.dumps([preset, overrides], sort_keys=True)  # one measurement per architecture
+        if arch not in rates:
+            torch.manual_seed(0)
+            norm = Normalization(torch.tensor([0.95, 0.76, 0.61, 0.61]), torch.tensor([0.64, 0.60, 0.59, 0.52]))
+            model = PanoVAE(get_preset(preset).override(**overrides), normalization=norm)
+            rates[arch] = training_rate(model, repeats=8, batch=BATCH)
+            print(f"{preset} {overrides}: {rates[arch]:.1f} training panoramas/s", flush=True)
+            path.write_text(json.dumps(rates, indent=2) + "\n")
+    return {name: rates[json.dumps([CANDIDATES[name][0], CANDIDATES[name][1]], sort_keys=True)] for name in names}
 
 
 def train(name: str, run: Path, data: str, steps: int) -> None:

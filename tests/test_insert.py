@@ -152,3 +152,52 @@ def test_a_diffuse_object_in_a_room_of_uniform_radiance_shades_at_albedo_times_r
     assert inside.sum() >= 6, inside.sum()
     shade = res.composite[inside].mean(0)
     np.testing.assert_allclose(shade, albedo * L, rtol=0.05)
+
+
+# ------------------------------------------------------------------------ out to other tools
+@pytest.mark.mitsuba
+def test_export_of_a_photo_fit_carries_the_camera_the_depth_mesh_and_the_backplate(fitted_dir, tmp_path):
+    pytest.importorskip("pxr")
+    pytest.importorskip("pygltflib")
+    r = run("export", fitted_dir, "--format", "usd")
+    assert r.exit_code == 0, r.output
+    usd = fitted_dir / "export" / "light.usda"
+    for name in ("light.usda", "light_radiance.exr", "light_backplate.png", "light_backplate.exr", "light_blender.py"):
+        assert (fitted_dir / "export" / name).is_file(), name
+    from pxr import Usd, UsdGeom
+
+    from roomlight.insert import load_fitted_photo
+
+    fitted = load_fitted_photo(fitted_dir)
+    stage = Usd.Stage.Open(str(usd))
+    cam = UsdGeom.Camera(stage.GetPrimAtPath("/World/Camera"))
+    # the horizontal field of view and the pose of the photograph's camera
+    fov = 2 * np.degrees(np.arctan(cam.GetHorizontalApertureAttr().Get() / (2 * cam.GetFocalLengthAttr().Get())))
+    assert fov == pytest.approx(fitted.case.intrinsics.fov_deg, rel=1e-6)
+    m = np.array(UsdGeom.Xformable(cam).ComputeLocalToWorldTransform(Usd.TimeCode.Default()))
+    np.testing.assert_allclose(m[3, :3], fitted.transform.translation, atol=1e-6)
+    np.testing.assert_allclose(m[:3, :3].T, fitted.transform.rotation, atol=1e-6)
+    depth = stage.GetPrimAtPath("/World/Photo/DepthMesh")
+    assert depth and depth.GetCustomDataByKey("roomlight:shadow_catcher") is True
+    pts = np.array(UsdGeom.Mesh(depth).GetPointsAttr().Get())
+    # the depth mesh's points are the photograph's pixels, seen by that camera in the room frame
+    seen = (pts - fitted.transform.translation) @ fitted.transform.rotation   # back to the camera frame
+    assert (seen[:, 2] < 0).all()
+    import pygltflib
+
+    out = tmp_path / "photo.glb"
+    assert run("export", fitted_dir, "--out", out).exit_code == 0
+    g = pygltflib.GLTF2().load(str(out))
+    names = [n.name for n in g.nodes]
+    assert {"area_light", "depth_mesh", "photo_camera"} <= set(names)
+    cam_node = g.nodes[names.index("photo_camera")]
+    yfov = g.cameras[cam_node.camera].perspective.yfov
+    k = fitted.case.intrinsics
+    assert yfov == pytest.approx(2 * np.arctan(k.height / (2 * k.fy)), rel=1e-6)
+    assert cam_node.extras["roomlight"]["backplate"] == "photo_backplate.png"
+    x, y, z, w = cam_node.rotation                      # glTF: (x, y, z, w), camera to world
+    rot = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                    [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                    [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    np.testing.assert_allclose(rot, fitted.transform.rotation, atol=1e-6)
+    np.testing.assert_allclose(cam_node.translation, fitted.transform.translation, atol=1e-6)

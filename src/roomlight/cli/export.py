@@ -13,10 +13,16 @@ from roomlight.export.formats import FORMATS
 @click.argument("path", type=click.Path())
 @click.option("--format", "fmt", type=click.Choice(FORMATS), default=None,
               help="Output format (default: from the suffix of --out).")
-@click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
-              help="The file to write (light.glb, light.usda / .usd / .usdc, light.obj).")
+@click.option("--out", "out", default=None, type=click.Path(dir_okay=False),
+              help="The file to write (light.glb, light.usda / .usd / .usdc, light.obj) [default, for a folder "
+                   "and --format: PATH/export/light.<format>].")
 def command(path, fmt, out):
-    """Export the light at PATH (an emitter bundle, fit output, sample or benchmark case).
+    """Export the light at PATH (an emitter bundle, fit or fit-photo output, sample or benchmark case).
+
+    A fit-photo folder also gives the photograph's camera (pose and intrinsics), its depth mesh
+    (marked as a shadow catcher) and the photograph as a backplate (<stem>_backplate.png/.exr),
+    plus <stem>_blender.py, which opens the file in Blender ready for Cycles (see docs/photo.md):
+    blender --python light_blender.py -- light.usda
 
     \b
     glb  glTF 2.0 binary: the mesh with an 8-bit sRGB emissive texture and
@@ -27,11 +33,22 @@ def command(path, fmt, out):
     """
     from roomlight.export import export_light, load_light
 
+    if out is None:
+        if fmt is None or not Path(path).is_dir():
+            raise click.UsageError("pass --out FILE (or --format with a folder PATH: PATH/export/light.<format>)")
+        out = str(Path(path) / "export" / f"light.{'usda' if fmt == 'usd' else fmt}")
     if fmt is None and Path(out).suffix.lstrip(".").lower() not in (*FORMATS, "usda", "usdc", "gltf"):
         raise click.BadParameter(f"cannot tell the format from {out!r}; pass --format {'|'.join(FORMATS)}",
                                  param_hint="--out")
     light = load_light(path)
     files = export_light(light, out, fmt)
+    if light.camera is not None and "intrinsics" in light.camera and Path(out).suffix.lower() != ".obj":
+        import shutil
+
+        from roomlight.export import blender_setup
+
+        files["blender_script"] = Path(out).with_name(f"{Path(out).stem}_blender.py")
+        shutil.copyfile(blender_setup.__file__, files["blender_script"])
     click.echo(f"{light.source} -> {out}")
     for name, p in files.items():
         click.echo(f"  {name:<9} {p} ({p.stat().st_size / 1e3:.0f} kB)")

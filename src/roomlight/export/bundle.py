@@ -6,6 +6,9 @@
   including one of the ``sample_000/`` folders ``roomlight sample`` writes;
 - a ``roomlight fit`` output folder (its ``emitter/`` bundle), or a benchmark result case
   (``.../<method>/`` holding ``fit/emitter/``);
+- a ``roomlight fit-photo`` output folder: its light, and with it the photograph's camera (pose and
+  intrinsics, in the light's room frame), the photograph's depth mesh (``depth_mesh``, for a shadow
+  catcher) and the photograph itself (``backplate``, linear RGB);
 - a folder of samples (the first ``sample_*`` bundle is taken);
 - a benchmark case (a folder with ``scene.json``/``scene.yaml``, or the scene file itself): its
   true emitter panorama becomes the mesh, and its objects come along;
@@ -58,6 +61,8 @@ class LightSource:
     objects: list[SceneObject] = field(default_factory=list)
     camera: dict | None = None  #: origin / target / up / fov of the scene's first view, when known
     metadata: dict = field(default_factory=dict)
+    #: (h, w, 3) linear RGB seen by ``camera`` (a fit-photo's photograph), or None
+    backplate: np.ndarray | None = None
 
 
 def _mesh_from_panorama(radiance: np.ndarray, depth: np.ndarray):
@@ -186,4 +191,32 @@ def load_light(path, scene=None) -> LightSource:
                              "(scene.json)")
     if scene is not None and not light.objects:
         light.objects, light.camera = _scene_objects(load_scene(scene, check_files=False))
+    if p.is_dir() and _is_photo_fit(p):
+        _add_photo(light, p)
     return light
+
+
+def _is_photo_fit(d: Path) -> bool:
+    try:
+        return json.loads((d / "result.json").read_text()).get("format") == "roomlight.photo-fit"
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _add_photo(light: LightSource, folder: Path) -> None:
+    """The photograph's camera, depth mesh and pixels, in the light's room frame (a fit-photo folder)."""
+    from roomlight.insert.fitted import load_fitted_photo
+    from roomlight.photo.geometry import build_geometry
+
+    fitted = load_fitted_photo(folder)
+    case, t = fitted.case, fitted.transform
+    geo = build_geometry(case, fitted.config)
+    light.objects = [SceneObject("depth_mesh", t.points(geo.mesh.vertices).astype(np.float32),
+                                 geo.mesh.faces.astype(np.int32), "shadow_catcher", "photo")]
+    k = case.intrinsics
+    light.camera = {"origin": t.translation.tolist(), "target": (t.translation + t.forward).tolist(),
+                    "up": t.up.tolist(), "fov": k.fov_deg, "rotation": t.rotation.tolist(),
+                    "intrinsics": {"fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy}, "width": k.width,
+                    "height": k.height}
+    light.backplate = np.ascontiguousarray(case.image, np.float32)
+    light.metadata["photo_fit"] = {"method": fitted.method, "scale": float(t.scale)}
