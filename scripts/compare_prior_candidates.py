@@ -8,8 +8,9 @@ cannot make one candidate's minutes shorter than another's. Then each candidate:
 
 1. trains ``--minutes`` worth of steps of a long cosine schedule (``roomlight train ... --until-step``);
 2. is scored by the trainer's validation pass (posterior-mean reconstructions of the validation rooms)
-   and by the latent fit of the README protocol (encoder start, depth weighted 3x) on ``--eval-limit``
-   validation rooms (``roomlight eval-prior``).
+   and, when it starts from the bundled prior (``--eval-all``: every one), by the latent fit of the
+   README protocol (encoder start, depth weighted 3x) on ``--eval-limit`` validation rooms
+   (``roomlight eval-prior``).
 
 Every stage is skipped when its output exists, so the script resumes where it stopped.
 
@@ -103,6 +104,10 @@ def main() -> None:
     ap.add_argument("--eval-limit", type=int, default=16, help="validation rooms in the latent-fit score")
     ap.add_argument("--fit-steps", type=int, default=1500)
     ap.add_argument("--no-eval", action="store_true", help="only train and read the trainer's validation")
+    ap.add_argument("--eval-all", action="store_true",
+                    help="also score the candidates trained from scratch by the latent fit (by default only those "
+                         "that start from the bundled prior: after minutes from scratch a network is far from "
+                         "competing, which the trainer's validation already shows)")
     args = ap.parse_args()
     names = [n.strip() for n in args.candidates.split(",") if n.strip()]
     bad = [n for n in names if n not in CANDIDATES]
@@ -119,7 +124,7 @@ def main() -> None:
         val = _events(run, "val")
         last = val[-1] if val else {}
         fit = {}
-        if not args.no_eval:
+        if not args.no_eval and (args.eval_all or CANDIDATES[name][2] == "bundled"):
             out = run / f"eval-val{args.eval_limit}"
             if not (out / "eval_prior.json").exists():
                 roomlight("eval-prior", "--model", str(run), "--data", args.data, "--split", "val", "--limit",
