@@ -201,3 +201,43 @@ def test_export_of_a_photo_fit_carries_the_camera_the_depth_mesh_and_the_backpla
                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
     np.testing.assert_allclose(rot, fitted.transform.rotation, atol=1e-6)
     np.testing.assert_allclose(cam_node.translation, fitted.transform.translation, atol=1e-6)
+
+
+# ----------------------------------------------------------------------------- in the viewer
+@pytest.mark.mitsuba
+def test_viewer_of_a_photo_fit_shows_the_photograph_and_the_probe_shading_follows_the_surface(fitted_dir, tmp_path):
+    """The photograph is the backdrop; a probe dropped on two surface points of the photograph is
+    shaded differently under the 2.5D light (left inset) and identically under the env map (right)."""
+    from helpers_browser import screenshot
+
+    pytest.importorskip("PIL")
+    try:
+        from roomlight.viewer.three import three_dir
+
+        three_dir()
+    except Exception as exc:  # three.js missing: the viewer cannot be written
+        pytest.skip(f"three.js is not installed: {exc}")
+    page = tmp_path / "photo.html"
+    r = run("view", fitted_dir, "--out", page, "--cube-size", "64")
+    assert r.exit_code == 0, r.output
+    size = (900, 500)
+    left, right, top, iw, ih = 900 - 2 * 248, 900 - 248, 8, 240, 120
+    a = screenshot(page, tmp_path / "a.png", "at=0.25,0.85&material=diffuse", size, budget_ms=1500).astype(float)
+    b = screenshot(page, tmp_path / "b.png", "at=0.8,0.5&material=diffuse", size, budget_ms=1500).astype(float)
+
+    def region(img, x, y, w, h):
+        return img[y:y + h, x:x + w]
+
+    assert np.abs(region(a, left, top, iw, ih) - region(b, left, top, iw, ih)).mean() > 1.0, \
+        "the probe's shading under the 2.5D light must change with where it rests"
+    np.testing.assert_allclose(region(a, right, top, iw, ih), region(b, right, top, iw, ih), atol=1,
+                               err_msg="under the env map the probe's shading does not depend on its position")
+    # the backdrop: the main view (letterboxed to 4:3 in the 900 x 500 window) shows the photograph
+    from roomlight.color import linear_to_srgb
+
+    photo = np.rint(linear_to_srgb(np.clip(load_fitted_photo(fitted_dir).case.image, 0, 1)) * 255)
+    vh, vw = 500, round(500 * 32 / 24)
+    x0 = (900 - vw) // 2
+    bottom = a[int(0.9 * vh):vh - 2, x0 + vw // 2:x0 + vw - 2]   # right part of the floor, away from the probe
+    ref = photo[int(0.9 * 24):, 16:].reshape(-1, 3).mean(0)
+    np.testing.assert_allclose(bottom.reshape(-1, 3).mean(0), ref, atol=25)

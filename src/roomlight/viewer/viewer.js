@@ -5,6 +5,8 @@
 // 0.8) sums it over a fixed set of directions weighted by the cosine. The env map is the same
 // panorama at infinity, which is the mesh seen from the capture point: its cube is rendered once
 // there. Display: clip(radiance * 2^stops, 0, 1)^(1/2.2), as roomlight's PNG previews.
+// A fit-photo's page shows the photograph as the backdrop, seen through its own camera (letterboxed
+// to its aspect), with the photograph's depth mesh as an invisible occluder the probe is dragged on.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
@@ -61,7 +63,23 @@ const plain = (color) => new THREE.ShaderMaterial({
   vertexShader: 'varying vec3 vN; void main() { vN = normalize(normalMatrix * normal); gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0); }',
   fragmentShader: 'uniform vec3 uColor; varying vec3 vN; void main() { gl_FragColor = vec4(uColor * (0.45 + 0.55 * abs(vN.z)), 1.0); }',
 });
+// a fit-photo: the backdrop, and the photograph's depth mesh, which writes depth but no colour, so the
+// probe hides behind what the photograph shows in front of it, and which the dragged probe rests on
+let photoTex = null;
+const surfaces = [];
+if (D.photo) {
+  const img = new Image();
+  photoTex = new THREE.Texture(img);
+  photoTex.colorSpace = THREE.NoColorSpace;  // sRGB values shown as they are, like the display() output
+  img.onload = () => { photoTex.needsUpdate = true; document.body.dataset.photo = 'loaded'; };
+  img.src = `data:image/png;base64,${D.photo.png}`;
+}
 for (const o of D.objects) {
+  if (o.role === 'photo') {
+    const m = new THREE.Mesh(geometry(o), new THREE.MeshBasicMaterial({ colorWrite: false, side: THREE.DoubleSide }));
+    m.layers.set(1); m.renderOrder = -1; m.name = o.id; scene.add(m); surfaces.push(m);
+    continue;
+  }
   const m = new THREE.Mesh(geometry(o), plain(o.role.includes('eval') ? 0x8fb7d9 : 0xc9b48f));
   m.material.side = THREE.DoubleSide; m.layers.set(1); m.name = o.id; scene.add(m);
 }
@@ -112,17 +130,38 @@ const insetCam = new THREE.PerspectiveCamera(30, 2, 0.1, 100);
 // ---- camera, controls, dragging
 const camera = new THREE.PerspectiveCamera(D.fov, 1, 0.01, 1e4);
 camera.layers.enable(1); camera.layers.enable(2);
+camera.up.fromArray(D.up);
 camera.position.fromArray(vec(args.get('camera'), D.camera.origin));
 const controls = new OrbitControls(camera, canvas);
 controls.target.fromArray(vec(args.get('target'), D.camera.target));
 controls.update();
 
 const ray = new THREE.Raycaster(); ray.layers.set(2);
+const surfaceRay = new THREE.Raycaster(); surfaceRay.layers.set(1);
 const plane = new THREE.Plane(), hit = new THREE.Vector3(), grab = new THREE.Vector3();
 let dragging = false;
+// the part of the canvas the main view uses (CSS pixels from the top left): all of it, or the
+// photograph's aspect, letterboxed, while the photograph is the backdrop
+const view = { x: 0, y: 0, w: 1, h: 1 };
+let photoOn = !!D.photo;
 function pointer(e) {
   const r = canvas.getBoundingClientRect();
-  ray.setFromCamera(new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1), camera);
+  const ndc = new THREE.Vector2(((e.clientX - r.left - view.x) / view.w) * 2 - 1, -((e.clientY - r.top - view.y) / view.h) * 2 + 1);
+  ray.setFromCamera(ndc, camera); surfaceRay.setFromCamera(ndc, camera);
+}
+// Put the probe on the surface a ray meets, resting on it along the surface's normal; false if it meets none.
+function restOnSurface(raycaster) {
+  const h = raycaster.intersectObjects(surfaces, false)[0];
+  if (!h || !h.face) return false;
+  const n = h.face.normal.clone().transformDirection(h.object.matrixWorld);
+  if (n.dot(raycaster.ray.direction) > 0) n.negate();
+  setProbe(...h.point.clone().addScaledVector(n, probe.scale.x).toArray());
+  return true;
+}
+// (u, v) in [0, 1] across the photograph (v down): the probe dropped on the surface seen there
+function dropAt(u, v) {
+  surfaceRay.setFromCamera(new THREE.Vector2(2 * u - 1, 1 - 2 * v), camera);
+  return restOnSurface(surfaceRay) ? probe.position.toArray() : null;
 }
 canvas.addEventListener('pointerdown', (e) => {
   pointer(e);
@@ -135,6 +174,7 @@ canvas.addEventListener('pointerdown', (e) => {
 canvas.addEventListener('pointermove', (e) => {
   if (!dragging) return;
   pointer(e);
+  if (surfaces.length && restOnSurface(surfaceRay)) return;
   if (ray.ray.intersectPlane(plane, hit)) setProbe(...hit.add(grab).toArray());
 });
 window.addEventListener('pointerup', () => { dragging = false; controls.enabled = true; });
@@ -166,13 +206,32 @@ for (const [i, k] of ['x', 'y', 'z'].entries()) {
 }
 $('material').addEventListener('change', (e) => { probe.material.uniforms.uDiffuse.value = e.target.value === 'diffuse' ? 1 : 0; });
 $('material').value = args.get('material') === 'diffuse' ? 'diffuse' : 'mirror';
+function setPhoto(on) {
+  photoOn = !!(on && D.photo);
+  if (photoOn) camera.layers.disable(0); else camera.layers.enable(0);  // the backdrop replaces the light
+  capture.visible = !photoOn;  // the capture point may be the camera itself
+  $('photo').checked = photoOn;
+}
+if (D.photo) {
+  $('photo').addEventListener('change', (e) => setPhoto(e.target.checked));
+  setPhoto(args.get('photo') !== '0');
+} else {
+  $('photo-row').style.display = 'none';
+}
 setExposure(args.has('exposure') ? +args.get('exposure') : D.exposure_stops);
 setProbe(...probe.position.toArray());
 
 // ---- render loop
 function resize() {
   const w = canvas.clientWidth, h = canvas.clientHeight;
-  if (canvas.width !== w || canvas.height !== h) { renderer.setSize(w, h, false); camera.aspect = w / h; camera.updateProjectionMatrix(); }
+  if (canvas.width !== w || canvas.height !== h) renderer.setSize(w, h, false);
+  let vw = w, vh = h;
+  if (photoOn) {  // the photograph's aspect, as large as fits
+    const a = D.photo.width / D.photo.height;
+    if (w / h > a) vw = Math.round(h * a); else vh = Math.round(w / a);
+  }
+  Object.assign(view, { x: Math.round((w - vw) / 2), y: Math.round((h - vh) / 2), w: vw, h: vh });
+  if (Math.abs(camera.aspect - vw / vh) > 1e-6) { camera.aspect = vw / vh; camera.updateProjectionMatrix(); }
 }
 function cube(cam, at) {
   U.uRaw.value = 1; cam.position.copy(at); cam.update(renderer, scene); U.uRaw.value = 0;
@@ -186,7 +245,11 @@ function frame() {
   renderer.setScissorTest(true);
   renderer.setViewport(0, 0, w, h); renderer.setScissor(0, 0, w, h);
   renderer.setClearColor(0x000000); renderer.clear();
+  const vy = h - view.y - view.h;  // WebGL counts from the bottom
+  renderer.setViewport(view.x, vy, view.w, view.h); renderer.setScissor(view.x, vy, view.w, view.h);
+  scene.background = photoOn ? photoTex : null;
   renderer.render(scene, camera);
+  scene.background = null;  // never in the cube maps
   // insets at the top right, 2:1 each, looking where the main camera looks
   const iw = D.inset_width, ih = iw / 2;
   const dir = camera.getWorldDirection(new THREE.Vector3());
@@ -201,5 +264,6 @@ function frame() {
   document.body.dataset.frames = frames;
   requestAnimationFrame(frame);
 }
-window.roomlight = { setProbe, setExposure, probe, camera, controls, data: D, frames: () => frames };
+window.roomlight = { setProbe, setExposure, setPhoto, dropAt, probe, camera, controls, data: D, frames: () => frames };
+if (args.has('at')) { resize(); camera.updateMatrixWorld(); dropAt(...vec(args.get('at'))); }
 requestAnimationFrame(frame);
