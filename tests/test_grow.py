@@ -101,3 +101,29 @@ def test_training_from_a_grown_latent_starts_at_the_source_loss(tmp_path):
     with pytest.raises(RoomlightError, match="architecture differs"):
         Trainer(cfg.replace(init_from=str(tmp_path / "src"), model_overrides={"latent_dim": 8}), data,
                 tmp_path / "shrunk", device="cpu", note=lambda m: None)
+
+
+def test_a_grown_run_stopped_by_its_time_budget_resumes_bit_identically(tmp_path):
+    """The long runs of a grown prior train in stretches (--time-budget, then the same command again):
+    stopped after a stretch and resumed, a run ends with the weights of a run never stopped."""
+    data = tmp_path / "toy"
+    write_toy_dataset(data, 8, 32)
+    base = get_train_preset("tiny").replace(**FAST, max_steps=3)
+    src = Trainer(base, data, tmp_path / "src", device="cpu", note=lambda m: None)
+    src.fit()
+    src.close()
+    cfg = base.replace(max_steps=6, init_from=str(tmp_path / "src"), model_overrides={"latent_dim": 24})
+    straight = Trainer(cfg, data, tmp_path / "straight", device="cpu", note=lambda m: None)
+    straight.fit()
+    straight.close()
+    first = Trainer(cfg, data, tmp_path / "stretches", device="cpu", note=lambda m: None)
+    first.fit(time_budget_s=1e-9)  # stops after its first step, as a budget running out does
+    first.close()
+    assert first.step == 1
+    again = Trainer(cfg, data, tmp_path / "stretches", device="cpu", note=lambda m: None)
+    assert again.step == 1
+    again.fit()
+    again.close()
+    a, b = straight.model.state_dict(), again.model.state_dict()
+    for k in a:
+        assert torch.equal(a[k], b[k]), k
