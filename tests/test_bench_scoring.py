@@ -190,3 +190,23 @@ def test_report_without_results_fails_cleanly(tmp_path):
 
     with pytest.raises(BenchError, match="no results"):
         write_report(tmp_path)
+
+
+def test_two_runs_compared_scene_by_scene(tmp_path, capsys):
+    """scripts/compare_bench_runs.py: the second run's prior against the first run's methods, paired by scene."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "compare_bench_runs", Path(__file__).resolve().parents[1] / "scripts" / "compare_bench_runs.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    _fake_results(tmp_path / "a", [("r1", "matte", "prior", 20.0, 0.1, 4.0), ("r2", "matte", "prior", 22.0, 0.3, 6.0),
+                                   ("r1", "matte", "direct-sphere", 21.0, 0.2, 3.0),
+                                   ("r2", "matte", "direct-sphere", 21.0, 0.2, 3.0)])
+    _fake_results(tmp_path / "b", [("r1", "matte", "prior", 21.0, 0.1, 2.0), ("r2", "matte", "prior", 22.5, 0.3, 3.0)])
+    mod.main([str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(tmp_path / "cmp.md")])
+    md = (tmp_path / "cmp.md").read_text()
+    # prior+wb - prior: PSNR +1.0 and +0.5 (mean +0.75), angle -2 and -3 (mean -2.5, both won)
+    assert "| prior | Δ PSNR LDR (dB, ↑) | +0.75 [" in md and "| prior | Δ angular error (°, ↓) | -2.500 [" in md
+    # prior+wb - direct-sphere: angle -1 and 0 (mean -0.5, one win)
+    assert "| direct-sphere | Δ angular error (°, ↓) | -0.500 [" in md and " 1/2" in md

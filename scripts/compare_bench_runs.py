@@ -1,0 +1,74 @@
+"""Two runs of a benchmark that differ by one setting, compared scene by scene with bootstrap intervals.
+
+A synthetic benchmark (``roomlight bench run``) or a photo benchmark (``roomlight bench run-photos``)
+was run twice on the same scenes, e.g. without and with the white balance. The second run's
+methods are renamed ``<method><suffix>`` and each is paired with every method of the first run:
+``METHOD+wb − baseline`` for each metric and material, as in the benchmark's own report.
+
+Run: .venv/bin/python scripts/compare_bench_runs.py BASE_RESULTS OTHER_RESULTS [--suffix +wb]
+         [--method prior] [--view eval] [--out FILE.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def _records(res: Path, suffix: str = "") -> tuple[list[dict], list[dict] | None]:
+    """(probe or scene records, material records or None) of a results folder."""
+    if (res / "run.json").is_file() and json.loads((res / "run.json").read_text()).get("kind") == "photos":
+        from roomlight.photobench.report import collect_photo_results, material_records, probe_records
+
+        results = collect_photo_results(res)
+        for r in results:
+            r["method"] += suffix
+        return probe_records(results), material_records(results)
+    from roomlight.bench.report import collect_results
+
+    recs = collect_results(res)
+    for r in recs:
+        r["method"] += suffix
+    return recs, None
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("base", type=Path)
+    ap.add_argument("other", type=Path)
+    ap.add_argument("--suffix", default="+wb", help="appended to the second run's method names")
+    ap.add_argument("--method", default="prior", help="the second run's method to compare (before the suffix)")
+    ap.add_argument("--view", default="eval", help="synthetic benchmark view: eval (the probe) or input")
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args(argv)
+    from roomlight.bench.paired import paired_differences, paired_markdown
+    from roomlight.errors import RoomlightError
+
+    try:
+        base, base_mat = _records(args.base)
+        other, other_mat = _records(args.other, args.suffix)
+    except RoomlightError as exc:
+        sys.exit(f"error: {exc}")
+    method = args.method + args.suffix
+    view = args.view if base_mat is None else "eval"
+    paired = paired_differences(base + other, method, view)
+    md = [f"## {method} (from {args.other}) against each method of {args.base}, view {view}", "",
+          paired_markdown(paired, method)]
+    if base_mat is not None and other_mat is not None:
+        from roomlight.photobench.scoring import MATERIAL_METRICS
+
+        higher = {k: False for k in MATERIAL_METRICS}
+        pm = paired_differences(base_mat + other_mat, method, "materials", metrics=MATERIAL_METRICS,
+                                higher_is_better=higher)
+        md += ["## The recovered materials", "",
+               paired_markdown(pm, method, ["objects"], {k: f"Δ {k}" for k in MATERIAL_METRICS}, note=False)]
+    text = "\n".join(md)
+    print(text)
+    if args.out:
+        args.out.write_text(text + "\n")
+
+
+if __name__ == "__main__":
+    main()
