@@ -5,11 +5,12 @@ on the photograph's surfaces (:mod:`roomlight.insert.objects`) and composited by
 rendering (:mod:`roomlight.insert.composite`). See docs/photo.md.
 """
 
-from roomlight.insert.composite import ALBEDO_RANGE, InsertResult, estimate_albedo, insert_objects
+from roomlight.insert.composite import (ALBEDO_RANGE, InsertResult, composite_objects, estimate_albedo, insert_objects,
+                                       place_objects)
 from roomlight.insert.fitted import FittedPhoto, fitted_lights, load_fitted_photo
 from roomlight.insert.objects import InsertSpec, PlacedObject, parse_material, place_object, read_placements
 from roomlight.insert.outputs import write_insert_outputs
 
-__all__ = ["ALBEDO_RANGE", "InsertResult", "estimate_albedo", "insert_objects", "FittedPhoto", "fitted_lights",
+__all__ = ["ALBEDO_RANGE", "InsertResult", "composite_objects", "estimate_albedo", "insert_objects", "place_objects", "FittedPhoto", "fitted_lights",
            "load_fitted_photo", "InsertSpec", "PlacedObject", "parse_material", "place_object", "read_placements",
            "write_insert_outputs"]

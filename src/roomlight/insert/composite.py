@@ -28,7 +28,8 @@ import torch
 from roomlight.insert.fitted import FittedPhoto
 from roomlight.insert.objects import InsertSpec, PlacedObject, place_object
 
-__all__ = ["InsertResult", "insert_objects", "estimate_albedo", "ALBEDO_RANGE", "COVERAGE_RAYS"]
+__all__ = ["InsertResult", "insert_objects", "place_objects", "composite_objects", "estimate_albedo", "ALBEDO_RANGE",
+           "COVERAGE_RAYS"]
 
 #: The estimated albedo of the scene's surfaces is clamped to this range: below, a surface in shadow
 #: of the fitted light would turn black and hide the new objects' light on it; above, a surface the
@@ -71,7 +72,7 @@ def _luminance(x: np.ndarray) -> np.ndarray:
 class _LocalScene:
     """The photograph's depth mesh and fitted objects under the fitted light, in the room frame."""
 
-    def __init__(self, fitted: FittedPhoto, out_hw: tuple[int, int], max_depth: int):
+    def __init__(self, fitted: FittedPhoto, out_hw: tuple[int, int], max_depth: int, with_scene: bool = True):
         from roomlight.photo.geometry import build_geometry, working_size
         from roomlight.photo.masks import resize_nearest
         from roomlight.photo.scene import object_shapes, photo_sensor
@@ -90,7 +91,9 @@ class _LocalScene:
         ii, jj = np.meshgrid(np.arange(gh), np.arange(gw), indexing="ij")
         # Texture coordinates: v = 0 on the top image row (Mitsuba's convention), pixel centres.
         self.uv = np.stack([(jj.ravel() + 0.5) / gw, (ii.ravel() + 0.5) / gh], 1)
-        self.objects = object_shapes(geo.objects, t, fitted.bsdfs()) if geo.objects else {}
+        self.objects = object_shapes(geo.objects, t, fitted.bsdfs()) if geo.objects and with_scene else {}
+        if not with_scene:  # the light alone: nothing to cast a shadow on or to reflect
+            self.background_faces = self.background_faces[:0]
         oh, ow = out_hw
         self.intrinsics = case.intrinsics.scaled(ow, oh)
         self.sensor = photo_sensor(self.intrinsics, t)
@@ -173,6 +176,18 @@ def _coverage(local: _LocalScene, placed: list[PlacedObject], n: int = COVERAGE_
     return (hits / (n * n)).astype(np.float32)
 
 
+def place_objects(fitted: FittedPhoto, specs: list[InsertSpec]) -> list[PlacedObject]:
+    """Each of ``specs`` placed on the fitted photograph's surfaces (camera frame)."""
+    from roomlight.photo.unproject import unproject
+
+    case = fitted.case
+    valid = np.isfinite(case.depth) & (case.depth > 0)
+    points = unproject(np.where(valid, case.depth, 1.0), case.intrinsics, case.depth_kind)
+    points[~valid] = np.nan
+    up = fitted.transform.rotation.T @ np.array([0.0, 1.0, 0.0])  # the room's up in the camera frame
+    return [place_object(s, points, up, where=f"object {k} ({s.object})") for k, s in enumerate(specs)]
+
+
 def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512, spp: int = 256, seed: int = 0,
                    max_depth: int = 5, say=None) -> InsertResult:
     """Composite ``specs`` into the fitted photograph (module docstring).
@@ -186,26 +201,40 @@ def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512
         max_depth: longest light path.
         say: called with one line per step, or None.
     """
+    t0 = time.perf_counter()
+    placed = place_objects(fitted, specs)
+    t_place = time.perf_counter() - t0
+    result = composite_objects(fitted, placed, size, spp, seed, max_depth, say)
+    result.info["timings_s"]["place"] = round(t_place, 3)
+    result.info["timings_s"]["total"] = round(time.perf_counter() - t0, 3)
+    return result
+
+
+def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int = 512, spp: int = 256,
+                      seed: int = 0, max_depth: int = 5, say=None, local_scene: bool = True) -> InsertResult:
+    """Composite objects already placed (camera frame) into the fitted photograph.
+
+    ``local_scene=False`` renders the objects under the light alone, without the photograph's depth mesh
+    and fitted objects: no shadow and nothing of the scene in their reflections (a naive paste, the
+    baseline differential rendering improves on).
+    """
     from roomlight.photo.geometry import resize_image, working_size
-    from roomlight.photo.unproject import unproject
 
     say = say or (lambda _m: None)
     t0 = time.perf_counter()
     case = fitted.case
     oh, ow = working_size(case.height, case.width, size)
-    depth = np.where(np.isfinite(case.depth) & (case.depth > 0), case.depth, 1.0)
-    points = unproject(depth, case.intrinsics, case.depth_kind)
-    points[~(np.isfinite(case.depth) & (case.depth > 0))] = np.nan
-    up = fitted.transform.rotation.T @ np.array([0.0, 1.0, 0.0])  # the room's up in the camera frame
-    placed = [place_object(s, points, up, where=f"object {k} ({s.object})") for k, s in enumerate(specs)]
-    timings = {"place": time.perf_counter() - t0}
+    timings = {}
 
     t1 = time.perf_counter()
-    local = _LocalScene(fitted, (oh, ow), max_depth)
+    local = _LocalScene(fitted, (oh, ow), max_depth, with_scene=local_scene)
     photo = resize_image(case.image, oh, ow)
-    say(f"estimating the scene's albedo under the {fitted.method} light ({ow}x{oh}, {spp} spp)")
-    white = local.render(None, {}, spp, seed + 1)
-    albedo = estimate_albedo(photo, white)
+    if local_scene:
+        say(f"estimating the scene's albedo under the {fitted.method} light ({ow}x{oh}, {spp} spp)")
+        white = local.render(None, {}, spp, seed + 1)
+        albedo = estimate_albedo(photo, white)
+    else:
+        albedo = np.full_like(photo, 0.5 * sum(ALBEDO_RANGE))
     timings["albedo"] = time.perf_counter() - t1
 
     t2 = time.perf_counter()
@@ -229,7 +258,8 @@ def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512
     shadow = np.where(cov > 0, 1.0, shadow).astype(np.float32)
     timings["composite"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
-    info = {"light": fitted.method, "light_kind": fitted.kind, "fit": str(fitted.folder), "size": [oh, ow],
+    info = {"light": fitted.method, "light_kind": fitted.kind, "local_scene": local_scene, "fit": str(fitted.folder),
+            "size": [oh, ow],
             "spp": spp, "seed": seed, "max_depth": max_depth, "albedo_range": list(ALBEDO_RANGE),
             "coverage_rays": COVERAGE_RAYS ** 2, "objects": [p.to_dict() for p in placed],
             "timings_s": {k: round(v, 3) for k, v in timings.items()}}
