@@ -483,6 +483,11 @@ def test_runner_resumes_shards_records_failures_and_the_report_pairs_methods(bui
     assert base["materials"]["mean"]["albedo_rmse"] == pytest.approx(0.05)
     oracle = json.loads((res / "cases/photo-00000/oracle/result.json").read_text())
     assert oracle["materials"] is None and oracle["emitter_kind"] == "mesh"
+    # the inserted objects composited under each light, scored in their regions
+    for r in (prior, base, oracle):
+        assert [e["label"] for e in r["insertion"]] == [101, 102] and (res / "cases/photo-00000" / r["method"] / "insert.exr").is_file()
+    region = {r["method"]: np.mean([e["psnr_ldr"] for e in r["insertion"]]) for r in (prior, base, oracle)}
+    assert region["prior"] == pytest.approx(region["oracle"], abs=1.0)  # the oracle's light, other materials
     for m in ("diffuse", "matte", "mirror"):
         # the stand-in prior returned the oracle's light: the same scores (the same seeds)
         assert prior["probes"][m]["psnr_ldr"] == pytest.approx(oracle["probes"][m]["psnr_ldr"], abs=1e-6)
@@ -513,6 +518,7 @@ def test_runner_resumes_shards_records_failures_and_the_report_pairs_methods(bui
     assert summary["materials"]["direct-envmap"]["albedo_rmse"]["mean"] == pytest.approx(0.05)
     assert summary["paired"]["materials"]["direct-envmap"]["objects"]["albedo_rmse"]["mean"] == pytest.approx(-0.05)
     assert paths["figure:photo-00000"].is_file() and paths["html"].read_text().count("<figure") == 1
+    assert "## Inserted objects" in md and summary["insertion"]["methods"]["prior"]["psnr_ldr"]["n"] == 2
 
 
 def run_cli(*args):
@@ -663,3 +669,32 @@ def test_probes_outside_a_small_light_are_counted_and_none_inside_a_large_one(bu
     centre = oracle.light_from_camera @ np.linalg.inv(truth.camera.matrix) @ np.append(p.center, 1.0)
     share = probes_outside(truth, light(float(np.linalg.norm(centre[:3]))), given_depth=False)[str(p.label)]
     assert 0.2 < share < 0.8
+
+
+@pytest.mark.mitsuba
+def test_inserted_objects_have_their_truth_and_the_oracle_composites_them_better_than_a_naive_paste(built):
+    """truth/insert.exr is the photo wherever the new objects change nothing (same seed and samples),
+    and under the oracle light differential rendering scores above pasting the objects lit alone."""
+    from roomlight.photobench import case as fmt
+    from roomlight.photobench.insertion import (composite_for_light, insertion_scores, naive_light, read_insert_truth,
+                                                region_mask)
+    from roomlight.photobench.scoring import load_truth, oracle_light
+
+    case = _case(built)
+    image, labels, objects = read_insert_truth(case / fmt.TRUTH)
+    assert [o.label for o in objects] == [101, 102] and all((labels == o.label).sum() > 0 for o in objects)
+    photo = fmt.read_rgb_exr(case / fmt.IMAGE)
+    far = ~np.any([region_mask(labels, o.label) for o in objects], axis=0)
+    same = np.abs(image - photo).max(-1) < 1e-6
+    assert same[far].mean() > 0.5, same[far].mean()       # most of the frame: the photo, sample for sample
+    assert not same[labels > 0].any()                       # the objects themselves are new
+    truth = load_truth(case)
+    mats = {k: m.to_dict() for k, m in truth.materials.items()}
+    oracle = composite_for_light(case, oracle_light(case, "mesh", truth), mats, objects, truth.camera, spp=32)
+    naive = composite_for_light(case, naive_light(case), mats, objects, truth.camera, spp=32, local_scene=False)
+    s_oracle = insertion_scores(oracle, image, labels, objects, truth.camera.matrix)
+    s_naive = insertion_scores(naive, image, labels, objects, truth.camera.matrix)
+    assert all(s["visible"] and s["region_pixels"] > s["object_pixels"] > 0 for s in s_oracle)
+    assert np.mean([s["psnr_ldr"] for s in s_oracle]) > np.mean([s["psnr_ldr"] for s in s_naive]) + 1.0
+    # outside the objects the naive paste leaves the photo as it is
+    np.testing.assert_allclose(naive[labels == 0][:50], np.maximum(photo[labels == 0][:50], 0), atol=1e-5)

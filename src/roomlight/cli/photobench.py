@@ -39,6 +39,9 @@ def _shard(text):
               help=f"Horizontal field of view in degrees {default_of(PhotoBenchConfig, 'fov')}.")
 @click.option("--probes", type=int, default=None,
               help=f"Probe positions per photo {default_of(PhotoBenchConfig, 'probes')}.")
+@click.option("--inserts", type=int, default=None,
+              help="New objects at the first probe positions, rendered into the room as the insertion truth "
+                   f"{default_of(PhotoBenchConfig, 'inserts')}.")
 @click.option("--depth-noise", type=FINITE, default=None, metavar="SIGMA",
               help="Degrade the depth the methods get: depth x exp(SIGMA n), n a smooth unit-RMS random field "
                    "(the truth keeps the exact depth) [default: 0].")
@@ -50,7 +53,7 @@ def _shard(text):
                    "--set oracle_height=32 --set objects=[2,2] (repeatable).")
 @click.option("--overwrite", is_flag=True, help="Rebuild photos that are already built.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, depth_noise, depth_scale, shard, sets, overwrite,
+def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, inserts, depth_noise, depth_scale, shard, sets, overwrite,
                 quiet):
     """Render the photo benchmark: photos of procedural rooms with inserted objects, and their truth.
 
@@ -64,7 +67,7 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, depth_noise,
 
     cfg = PhotoBenchConfig(n=n, seed=seed)
     height, width = res if res else (None, None)
-    cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, fov=fov, probes=probes,
+    cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, fov=fov, probes=probes, inserts=inserts,
                        depth_noise=depth_noise, depth_scale=depth_scale, **parse_sets(sets))
     result = make_photo_benchmark(out_dir, cfg, overwrite=overwrite, shard=_shard(shard), progress=not quiet)
     click.echo(f"make-photos: {len(result['built'])} built, {len(result['updated'])} with a new depth, "
@@ -83,7 +86,8 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, depth_noise,
               help=f"Comma-separated methods [default: {','.join(DEFAULT_METHODS)}]; also oracle and oracle-envmap "
                    "(the photo's room captured at the probes, as a 2.5D light or at infinity: references), "
                    "prior-ceiling (the prior's latent fitted to that room: the prior's own ceiling), and "
-                   "prior-view, prior-samples, prior-zero (the prior's fit from a fixed start, as fit-photo --init).")
+                   "prior-view, prior-samples, prior-zero (the prior's fit from a fixed start, as fit-photo --init), "
+                   "and naive-paste (a uniform light of the photo's mean colour, its inserted objects pasted alone).")
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior for the prior methods [default: the prior bundled with roomlight].")
 @click.option("--preset", default="paper", show_default=True,
@@ -95,6 +99,9 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, depth_noise,
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, quiet):
     """Fit every photo of BENCH with each method and score the probes under the recovered light.
+
+    Photos built with inserted objects (make-photos --inserts, default 2) also get them composited under
+    each light by roomlight insert's differential rendering, scored against their path-traced truth.
 
     Each case writes OUT/cases/<photo>/<method>/result.json (probe scores per material and probe,
     material errors); finished cases are skipped, so re-running resumes. Failed cases are

@@ -56,6 +56,7 @@ MANIFEST_VERSION = 1
 #: Rooms tried for one photo before it is reported as failed.
 ROOMS_PER_PHOTO = 8
 _SALT_ROOM, _SALT_STAGE, _SALT_RENDER, _SALT_DEPTH = 0x726F6F6D, 0x73746167, 0x72656E64, 0x64657074
+_SALT_INSERT = 0x696E7374
 
 
 class PhotoBuildError(RoomlightError):
@@ -176,6 +177,13 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
         probe_renders[m], halves = render_probe_truth(probe_scenes[m], cam, config.probe_spp, seeds[f"probes_{m}"],
                                                       window, k)
         noise_floor[m] = score_view(halves[0], halves[1], in_window)
+    from roomlight.photobench.insertion import render_insert_truth, stage_inserts
+
+    inserts = stage_inserts(st.probes, config.inserts, np.random.default_rng([config.seed, index, _SALT_INSERT]),
+                            config.metal_fraction, config.roughness)
+    if inserts:  # the photo's scene with the new objects, with the photo's seed: elsewhere the photo itself
+        insert_image, insert_labels = render_insert_truth(scenes, meshes, inserts, cam, config.spp, seeds["photo"],
+                                                          config.supersample, k)
     oracle_rad = render_radiance(room_scene, st.oracle_center, height=config.oracle_height, spp=config.oracle_spp,
                                  seed=seeds["oracle"]) * k
     oracle_depth = render_depth(room_scene, st.oracle_center, height=config.oracle_height)
@@ -207,6 +215,15 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
         probes = [{**p.to_dict(), "center_camera": [float(c) for c in
                                                     (world_to_cam[:3, :3] @ np.asarray(p.center) + world_to_cam[:3, 3])]}
                   for p in st.probes]
+        if inserts:
+            from roomlight.photobench import insertion as ins
+
+            fmt.write_rgb_exr(tmp / fmt.TRUTH / ins.INSERT_IMAGE, insert_image)
+            fmt.write_png(tmp / fmt.TRUTH / ins.INSERT_MASK, insert_labels)
+            fmt.write_json(tmp / fmt.TRUTH / ins.INSERT_JSON, {
+                "objects": [o.to_dict() for o in inserts], "image": ins.INSERT_IMAGE, "mask": ins.INSERT_MASK,
+                "pixels": {str(o.label): int((insert_labels == o.label).sum()) for o in inserts},
+                "note": "the photo's scene with these objects, same camera, seed and samples as the photo"})
         fmt.write_json(tmp / fmt.PROBES, {"probes": probes, "materials": list(PROBE_MATERIALS),
                                           "images": {m: fmt.probe_image_name(m) for m in PROBE_MATERIALS},
                                           "window": list(window), "spp": config.probe_spp, "mask": fmt.PROBE_MASK,

@@ -34,6 +34,7 @@ class PhotoBenchConfig(StrictConfig):
     eye_height: tuple[float, float] = (1.5, 1.7)         #: camera height range above the floor
     objects: tuple[int, int] = (2, 3)                    #: inserted objects per photo (inclusive range)
     probes: int = 3                                      #: probe positions per photo
+    inserts: int = 2                                     #: new objects at the first probe positions, with their truth
     object_size: tuple[float, float] = (0.05, 0.08)      #: object bounding radius / its distance to the camera
     probe_size: float = 0.045                            #: probe radius / its distance to the camera
     metal_fraction: float = 0.3                          #: chance that an object is a metal (metallic 1)
@@ -58,6 +59,7 @@ class PhotoBenchConfig(StrictConfig):
                   # components would be renumbered: two objects keep the labels as written
                   (2 <= self.objects[0] <= self.objects[1], "objects must be an increasing range from 2"),
                   (self.probes >= 1, "probes must be at least 1"),
+                  (0 <= self.inserts <= self.probes, "inserts must be between 0 and the number of probes"),
                   (0.0 < self.object_size[0] <= self.object_size[1] < 0.5, "object_size must be in (0, 0.5)"),
                   (0.0 < self.probe_size < 0.5, "probe_size must be in (0, 0.5)"),
                   (0.0 <= self.metal_fraction <= 1.0, "metal_fraction must be in [0, 1]"),

@@ -38,8 +38,8 @@ __all__ = ["collect_photo_results", "probe_records", "material_records", "materi
            "PHOTO_METHOD_ORDER"]
 
 #: Row order: the baselines, the prior, then the references.
-PHOTO_METHOD_ORDER = ("direct-envmap", "prior-envmap", "prior-samples", "prior-zero", "prior-view", "prior",
-                      "prior-ceiling", "oracle-envmap", "oracle")
+PHOTO_METHOD_ORDER = ("naive-paste", "direct-envmap", "prior-envmap", "prior-samples", "prior-zero", "prior-view",
+                      "prior", "prior-ceiling", "oracle-envmap", "oracle")
 #: The steps from the oracle light down to the photo fit: (method, the reference it is compared with).
 GAP_STEPS = (("prior-ceiling", "oracle", "the prior's capacity: its best latent for the whole room vs the room"),
              ("prior-samples", "prior-ceiling", "the fit from the paper's start vs the prior's ceiling"),
@@ -218,7 +218,7 @@ def _outside_markdown(outside: dict) -> list[str]:
     return md + [""]
 
 
-def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(), outside=None) -> str:
+def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(), outside=None, insertion=None) -> str:
     photos = len({r["photo"] for r in results})
     md = ["# Photo benchmark results", "",
           f"{len(results)} cases, {photos} photos. Cells: mean ± std over photos (one photo: its value alone); "
@@ -228,6 +228,7 @@ def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(
           paired_markdown(paired, "prior", [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
           *_gap_markdown(list(gap), [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
           *_outside_markdown(outside or {}),
+          *_insertion_markdown(insertion),
           "## Recovered materials (mean error over each photo's objects)", "", materials_table(mats),
           "## Paired differences on the materials", "",
           paired_markdown(paired_mat, "prior", ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()},
@@ -331,6 +332,86 @@ def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures
     return path
 
 
+#: Scores of an inserted object (photobench.insertion) and whether higher is better.
+INSERT_METRICS = {"psnr_ldr": True, "ssim": True, "object_psnr_ldr": True, "rmse_hdr": False}
+INSERT_LABELS = {"psnr_ldr": "region PSNR LDR ↑", "ssim": "region SSIM ↑", "object_psnr_ldr": "object PSNR LDR ↑",
+                 "rmse_hdr": "region RMSE HDR ↓"}
+
+
+def insertion_records(results: list[dict]) -> list[dict]:
+    """One record per photo, inserted object and method, in the benchmark's record shape (scene = photo/object)."""
+    out = []
+    for r in results:
+        for e in r.get("insertion") or []:
+            if e.get("visible"):
+                out.append({"scene": f"{r['photo']}/{e['id']}", "material": "objects", "method": r["method"],
+                            "distance_m": e["distance_m"],
+                            "metrics": {"insert": {k: e[k] for k in INSERT_METRICS}}})
+    return out
+
+
+def insertion_summary(records: list[dict]) -> dict:
+    """Means per method, paired differences against the prior, and whether the 2.5D light's advantage over
+    the prior at infinity grows with the object's distance from the camera."""
+    from roomlight.stats import bootstrap_mean_interval
+
+    by: dict[str, dict[str, list[float]]] = {}
+    for r in records:
+        for k, v in r["metrics"]["insert"].items():
+            by.setdefault(r["method"], {}).setdefault(k, []).append(float(v))
+    methods = {m: {k: {"mean": float(np.nanmean(v)), "std": float(np.nanstd(v)), "n": len(v)} for k, v in d.items()}
+               for m, d in by.items()}
+    paired = paired_differences(records, "prior", "insert", exclude=(), metrics=tuple(INSERT_METRICS),
+                                higher_is_better=INSERT_METRICS)
+    # distance: per object, prior - prior-envmap region PSNR against the distance
+    table: dict[str, dict] = {}
+    for r in records:
+        table.setdefault(r["scene"], {"d": r["distance_m"]})[r["method"]] = r["metrics"]["insert"]["psnr_ldr"]
+    pairs = [(v["d"], v["prior"] - v["prior-envmap"]) for v in table.values() if "prior" in v and "prior-envmap" in v]
+    distance = None
+    if len(pairs) >= 4:
+        d, diff = np.asarray(pairs).T
+        med = float(np.median(d))
+        near, far = diff[d <= med], diff[d > med]
+        slope = float(np.polyfit(d, diff, 1)[0]) if np.ptp(d) > 0 else float("nan")
+        rng = np.random.default_rng(0)
+        boots = []
+        for _ in range(2000):
+            i = rng.integers(0, len(d), len(d))
+            if np.ptp(d[i]) > 0:
+                boots.append(np.polyfit(d[i], diff[i], 1)[0])
+        distance = {"n": len(pairs), "median_m": med, "slope_db_per_m": slope,
+                    "slope_ci95": [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))],
+                    "near": {"mean": float(near.mean()), "ci95": list(bootstrap_mean_interval(near)), "n": len(near)},
+                    "far": {"mean": float(far.mean()), "ci95": list(bootstrap_mean_interval(far)), "n": len(far)}}
+    return {"methods": methods, "paired": paired, "distance": distance}
+
+
+def _insertion_markdown(summary: dict | None) -> list[str]:
+    if not summary or not summary["methods"]:
+        return []
+    md = ["## Inserted objects (roomlight insert)", "",
+          "Each photo's new objects composited under each recovered light by differential rendering (`naive-paste`: "
+          "lit by a uniform light of the photo's mean colour, alone) against their path-traced truth in the room; "
+          "the region is the object dilated by its projected radius, covering its shadow. Mean ± std over objects.", "",
+          "| Method | " + " | ".join(INSERT_LABELS.values()) + " | objects |",
+          "|---|" + ":---:|" * len(INSERT_LABELS) + "---:|"]
+    for m in ordered(summary["methods"], PHOTO_METHOD_ORDER):
+        cells = [f"{summary['methods'][m][k]['mean']:.3f} ± {summary['methods'][m][k]['std']:.3f}" if k in ("ssim", "rmse_hdr")
+                 else f"{summary['methods'][m][k]['mean']:.2f} ± {summary['methods'][m][k]['std']:.2f}" for k in INSERT_LABELS]
+        md.append(f"| {m} | " + " | ".join(cells) + f" | {summary['methods'][m]['psnr_ldr']['n']} |")
+    md += ["", paired_markdown(summary["paired"], "prior", ["objects"], {k: f"Δ {v}" for k, v in INSERT_LABELS.items()},
+                               note=False)]
+    d = summary.get("distance")
+    if d:
+        md += [f"**Does the 2.5D light's advantage grow with distance?** prior − prior-envmap region PSNR per object "
+               f"({d['n']} objects): nearer than the median {d['median_m']:.2f} m {d['near']['mean']:+.2f} dB "
+               f"[{d['near']['ci95'][0]:+.2f}, {d['near']['ci95'][1]:+.2f}], farther {d['far']['mean']:+.2f} dB "
+               f"[{d['far']['ci95'][0]:+.2f}, {d['far']['ci95'][1]:+.2f}]; slope {d['slope_db_per_m']:+.2f} dB/m "
+               f"[{d['slope_ci95'][0]:+.2f}, {d['slope_ci95'][1]:+.2f}] (bootstrap over objects).", ""]
+    return md
+
+
 def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bool = True) -> dict[str, Path]:
     """Write the report of a results folder (module docstring); returns the files by role."""
     results = collect_photo_results(res_dir)
@@ -354,6 +435,8 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
     gap = gap_steps(probes)
     outside = outside_counts(results)
     timing = _timing(results)
+    inserted = insertion_records(results)
+    ins_summary = insertion_summary(inserted) if inserted else None
     paths = {"markdown": out / "report.md", "csv": out / "table.csv", "materials": out / "materials.csv",
              "cases": out / "cases.csv", "json": out / "summary.json"}
     write_wide_csv(paths["csv"], probes, "eval")
@@ -369,10 +452,12 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
                                      "std": float(np.std([v[k] for v in vals])), "n": len(vals)}
                                  for k in MATERIAL_METRICS} for m, vals in mat_summary.items()},
                "paired": {"probes": paired, "materials": paired_mat}, "gap_steps": gap, "probes_outside": outside, "timing": timing,
+               "insertion": ins_summary,
                "failed": [f.get("case", "?") for f in failures], "settings": settings,
                "std": "population standard deviation over photos (ddof = 0)"}
     paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
-    paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures, gap, outside))
+    paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures, gap, outside,
+                                           ins_summary))
     figs: dict[str, Path] = {}
     if figures:
         by: dict[str, list[dict]] = {}

@@ -7,9 +7,13 @@ For each case (photo x method), in manifest order:
    ``oracle-envmap`` fit nothing and take the photo's oracle light as a 2.5D light or an env map;
    ``prior-ceiling`` takes the prior's latent fitted to that oracle panorama (the prior's ceiling);
    ``prior-view``, ``prior-samples`` and ``prior-zero`` are ``prior`` from a fixed start (``--init``);
+   ``naive-paste`` is a uniform light of the photo's mean colour;
 2. the probes are rendered at their true positions under the recovered light and scored against
    the ground truth (:mod:`roomlight.photobench.scoring`), and the recovered materials against
-   the true ones.
+   the true ones;
+3. when the photo has inserted objects with their truth, they are composited into the photo under the
+   recovered light by ``roomlight insert``'s differential rendering (the naive paste: lit alone, no
+   shadow) and scored in their regions (:mod:`roomlight.photobench.insertion`).
 
 Layout of ``RES``::
 
@@ -18,6 +22,7 @@ Layout of ``RES``::
         result.json       scores per probe material and probe, material errors, timings (written last)
         recovered.exr     the recovered radiance (+ Z depth when it has one)
         probes_<m>.exr    the probes under the recovered light, one per probe material
+        insert.exr        the inserted objects composited under it (photos built with them)
         fit/              the fit's own files (panorama.exr, emitter/, materials.json, result.json, ...)
         error.json        instead of result.json when the case failed (retried on the next run)
 
@@ -37,6 +42,7 @@ from roomlight.bench.runner import RunSummary, check_run_file, record_failure, w
 from roomlight.errors import RoomlightError
 from roomlight.photobench.adapter import FIT_PHOTO_METHODS, PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.photobench.ceiling import CEILING, prior_ceiling_light
+from roomlight.photobench.insertion import NAIVE
 from roomlight.photobench.builder import read_photo_manifest
 from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_truth, material_errors, oracle_light,
                                           probes_outside,
@@ -49,7 +55,7 @@ __all__ = ["ORACLES", "REFERENCES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT
 ORACLES = {"oracle": "mesh", "oracle-envmap": "envmap"}
 #: References that fit nothing from the photograph: the oracles and the prior's ceiling
 #: (:mod:`roomlight.photobench.ceiling`). Their lights live in the oracle's frame.
-REFERENCES = tuple(ORACLES) + (CEILING,)
+REFERENCES = tuple(ORACLES) + (CEILING, NAIVE)
 KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
 DEFAULT_METHODS = FIT_PHOTO_METHODS
 #: Samples per pixel of the scoring renders.
@@ -103,16 +109,22 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
     cdir.mkdir(parents=True, exist_ok=True)
     truth = load_truth(case.case_dir)
     t0 = time.perf_counter()
-    materials = None
+    materials = fitted_materials = None
     if case.method in ORACLES:
         light = oracle_light(case.case_dir, ORACLES[case.method], truth)
         fit_seconds = 0.0
     elif case.method == CEILING:
         light = prior_ceiling_light(case.case_dir, model, truth)
         fit_seconds = time.perf_counter() - t0
+    elif case.method == NAIVE:
+        from roomlight.photobench.insertion import naive_light
+
+        light = naive_light(case.case_dir)
+        fit_seconds = 0.0
     else:
         out = fit(case.case_dir, case.method, preset, cdir / "fit", model=model, progress=progress,
                   overrides=overrides)
+        fitted_materials = out.get("materials") or {}
         light = _recovered(out)
         materials = material_errors(truth.materials, out.get("materials") or {})
         fit_seconds = float(out.get("seconds", time.perf_counter() - t0))
@@ -125,17 +137,36 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
     for m, img in renders.items():
         write_rgb_exr(cdir / f"probes_{m}.exr", img)
     outside = probes_outside(truth, light, given_depth=case.method not in REFERENCES)
+    insertion = _insertion(case, light, truth, fitted_materials, preset, overrides, eval_spp, cdir)
     record = {"photo": case.photo, "case_dir": str(Path(case.case_dir).resolve()), "method": case.method,
               "emitter_kind": light.kind, "probes": scores, "materials": materials,
-              "probes_outside": outside,
+              "probes_outside": outside, "insertion": insertion,
               "depth_factors": truth.depth_factors, "fit_seconds": fit_seconds, "wall_seconds": wall,
               "eval_seconds": time.perf_counter() - t1, "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH,
               "recovered_resolution": list(light.radiance.shape[:2]),
               "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
+                        **({"insert": "insert.exr"} if insertion else {}),
                         **({"fit": "fit"} if case.method not in REFERENCES else {})}}
     (cdir / "error.json").unlink(missing_ok=True)
     write_json(cdir / RESULT, record)
     return record
+
+
+def _insertion(case: PhotoCase, light, truth, fitted_materials, preset, overrides, spp: int, cdir: Path):
+    """Per inserted object, the composite's scores (None for a photo built without inserted objects)."""
+    from roomlight.photobench import case as fmt
+    from roomlight.photobench.insertion import composite_for_light, insertion_scores, read_insert_truth
+
+    ins = read_insert_truth(Path(case.case_dir) / fmt.TRUTH)
+    if ins is None:
+        return None
+    image, labels, objects = ins
+    # a reference fits no materials: the local scene's objects get their true ones
+    materials = fitted_materials if fitted_materials else {k: m.to_dict() for k, m in truth.materials.items()}
+    composite = composite_for_light(case.case_dir, light, materials, objects, truth.camera, preset, overrides, spp,
+                                    local_scene=case.method != NAIVE)
+    fmt.write_rgb_exr(cdir / "insert.exr", composite)
+    return insertion_scores(composite, image, labels, objects, truth.camera.matrix)
 
 
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
