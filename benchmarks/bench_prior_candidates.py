@@ -18,10 +18,8 @@ Run: .venv/bin/python benchmarks/bench_prior_candidates.py [--candidates lite,li
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import torch
@@ -41,14 +39,7 @@ CANDIDATES = {
 }
 
 
-def median_time(fn, repeats: int) -> float:
-    fn()  # warm-up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+from bench_model import median_time  # noqa: E402  (warm-up, then the median of repeats)
 
 
 def make_model(name: str):

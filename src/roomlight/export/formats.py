@@ -145,6 +145,19 @@ def _write_glb(light: LightSource, out: Path) -> dict[str, Path]:
     return {"scene": out, **files}
 
 
+def _usd_mesh(stage, path: str, vertices, faces):
+    """A double-sided triangle ``UsdGeom.Mesh`` at ``path`` (no subdivision)."""
+    from pxr import UsdGeom, Vt
+
+    mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(vertices, np.float32)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(faces, np.int32).ravel()))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    mesh.CreateDoubleSidedAttr(True)
+    return mesh
+
+
 def _write_usd(light: LightSource, out: Path) -> dict[str, Path]:
     from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt
 
@@ -154,12 +167,7 @@ def _write_usd(light: LightSource, out: Path) -> dict[str, Path]:
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)
     world = UsdGeom.Xform.Define(stage, "/World")
     stage.SetDefaultPrim(world.GetPrim())
-    mesh = UsdGeom.Mesh.Define(stage, "/World/AreaLight")
-    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(light.vertices, np.float32)))
-    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(light.faces), 3, np.int32)))
-    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(light.faces, np.int32).ravel()))
-    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-    mesh.CreateDoubleSidedAttr(True)
+    mesh = _usd_mesh(stage, "/World/AreaLight", light.vertices, light.faces)
     # USD's texture origin is the image's bottom-left corner: t = 1 - v
     st = np.stack([light.uv[:, 0], 1.0 - light.uv[:, 1]], -1).astype(np.float32)
     UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
@@ -244,12 +252,7 @@ def _usd_photo(stage, light: LightSource, out: Path) -> dict[str, Path]:
         if obj.material != "shadow_catcher":
             continue
         UsdGeom.Xform.Define(stage, "/World/Photo")
-        mesh = UsdGeom.Mesh.Define(stage, "/World/Photo/DepthMesh")
-        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(obj.vertices, np.float32)))
-        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(obj.faces), 3, np.int32)))
-        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(obj.faces, np.int32).ravel()))
-        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-        mesh.CreateDoubleSidedAttr(True)
+        mesh = _usd_mesh(stage, "/World/Photo/DepthMesh", obj.vertices, obj.faces)
         mesh.GetPrim().SetCustomDataByKey("roomlight:shadow_catcher", True)
         mat = UsdShade.Material.Define(stage, "/World/Looks/ShadowCatcher")
         surf = UsdShade.Shader.Define(stage, "/World/Looks/ShadowCatcher/Surface")
