@@ -42,7 +42,7 @@ class DemoConfig(StrictConfig):
     out: Path = Path("roomlight-demo")
     height: int = 64          #: panorama / emitter height (width 2x)
     res: tuple[int, int] = (96, 96)  #: benchmark image size (H, W)
-    iterations: int = 120     #: fitting iterations per method
+    iterations: int = 80      #: fitting iterations per method (the three rooms fit in about 80 s on 2 cores)
     spp: int = 8              #: samples per pixel per fitting step
     gt_spp: int = 128         #: samples per pixel of the ground-truth and evaluation renders
     #: Samples per pixel of the parallax figure. The diffuse probe under the 2.5D light (thousands
