@@ -41,7 +41,7 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
     """
     import drjit as dr
 
-    from roomlight.render.variant import torch_device
+    from roomlight.render.variant import serial_backward, torch_device
 
     mi = escene.mi
     seed_grad = seed + 1 if seed_grad is None else seed_grad
@@ -62,4 +62,32 @@ def render_differentiable(escene: EmitterScene, radiance: torch.Tensor, depth: t
                          spp_grad=spp_grad or spp, sensor=sensor)
 
     img = _render(tex, verts, extra)
+    if img.requires_grad and serial_backward():
+        _serialise_adjoint(img, [t for t in (tex, verts, *extra.values()) if t is not None and t.requires_grad])
     return img[..., :3]
+
+
+def _serialise_adjoint(image: torch.Tensor, inputs: list[torch.Tensor]) -> None:
+    """Run the adjoint pass of ``image`` on one Dr.Jit worker, then give the workers back.
+
+    Tensor hooks bracket it: the hook on the image's gradient runs just before the wrapped render's
+    backward (one worker), the hooks on its inputs' gradients just after (all workers again), so
+    every other render keeps its workers. See :func:`roomlight.render.variant.serial_backward`.
+    """
+    import drjit as dr
+
+    from roomlight.render.variant import worker_count
+
+    workers = worker_count()
+
+    def one(g):
+        dr.set_thread_count(1)
+        return g
+
+    def back(g):
+        dr.set_thread_count(workers)
+        return g
+
+    image.register_hook(one)
+    for t in inputs:
+        t.register_hook(back)

@@ -14,7 +14,7 @@ import os
 
 from roomlight.errors import BackendError
 
-__all__ = ["MIN_LLVM", "ENV_DETERMINISTIC", "deterministic", "llvm_status", "cuda_available", "choose_variant",
+__all__ = ["MIN_LLVM", "ENV_DETERMINISTIC", "ENV_PARALLEL_BACKWARD", "serial_backward", "worker_count", "deterministic", "llvm_status", "cuda_available", "choose_variant",
            "ensure_variant", "mitsuba", "torch_device"]
 
 MIN_LLVM = (16, 0, 0)
@@ -24,6 +24,8 @@ LLVM_FIX = (
 )
 
 _active: str | None = None
+#: Dr.Jit workers outside adjoint passes, set when the LLVM variant is activated.
+_workers: int | None = None
 
 
 def llvm_status() -> tuple[bool, str]:
@@ -96,11 +98,36 @@ def ensure_variant(prefer: str | None = None) -> str:
         import drjit as dr
 
         dr.set_thread_count(max(2, int(threads)))
+    if name.startswith("llvm"):
+        import drjit as dr
+
+        global _workers
+        _workers = dr.thread_count()
     return name
 
 
 #: Set to 1 (``roomlight --deterministic``) for bit-identical renders and fits on the CPU.
 ENV_DETERMINISTIC = "ROOMLIGHT_DETERMINISTIC"
+#: Set to 1 to let the adjoint (backward) pass of a differentiable render use every Dr.Jit worker:
+#: faster where the adjoint dominates, but its gradients then vary in their last bits run to run.
+ENV_PARALLEL_BACKWARD = "ROOMLIGHT_PARALLEL_BACKWARD"
+
+
+def serial_backward() -> bool:
+    """Whether differentiable renders on the CPU run their adjoint pass on one Dr.Jit worker (the
+    default): the primal render is bit-identical run to run with any number of workers, the adjoint
+    is not (workers scatter-add gradients into shared texels in varying order), so serialising only
+    the adjoint makes fits repeatable at a fraction of the cost of one worker throughout."""
+    return (ensure_variant().startswith("llvm")
+            and os.environ.get(ENV_PARALLEL_BACKWARD, "").strip().lower() not in ("1", "true", "yes", "on"))
+
+
+def worker_count() -> int:
+    """Dr.Jit's worker count outside adjoint passes (the thread policy's, or Dr.Jit's default)."""
+    import drjit as dr
+
+    ensure_variant()
+    return _workers if _workers is not None else dr.thread_count()
 
 
 def deterministic() -> bool:
