@@ -104,6 +104,10 @@ class TrainConfig(StrictConfig):
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
         object.__setattr__(self, "loss", dict(self.loss))
         object.__setattr__(self, "model_overrides", dict(self.model_overrides))
+        if self.init_from is not None:  # one spelling per folder, so a resume given a relative path matches
+            from pathlib import Path
+
+            object.__setattr__(self, "init_from", str(Path(self.init_from).expanduser().resolve()))
         self.validate()
 
     def validate(self) -> None:
