@@ -83,18 +83,26 @@ def place_scene(depth: torch.Tensor, rotation: np.ndarray, observed: np.ndarray,
     return SceneTransform(rotation, float(torch.exp(log_scale.detach())), shift.detach().double().numpy())
 
 
-def matching_log_exposure(radiance: torch.Tensor, directions, observed, tau: float = 0.99) -> float:
-    """log of the factor that gives the emitter (H, W, 3) radiance, sampled in ``directions`` (N, 3),
-    the log-average luminance of the observed (N, 3) radiance; saturated observations are left out.
-    0 when nothing is observed."""
+def _unsaturated_pairs(radiance: torch.Tensor, directions, observed, tau: float):
+    """(observed (M, 3), emitted (M, 3)) float64 radiance of the unsaturated observations and of the
+    emitter (H, W, 3) sampled in their directions (N, 3), or None when every observation is saturated."""
     obs = torch.as_tensor(observed, dtype=torch.float32)
     dirs = torch.as_tensor(directions, dtype=torch.float32)
     keep = obs.amax(-1) < tau
     if not bool(keep.any()):
-        return 0.0
+        return None
     emitted = sample_equirect(radiance.detach().float().cpu().permute(2, 0, 1)[None], dirs[keep])[0].T
-    y_obs = luminance_np(obs[keep].numpy().astype(np.float64))
-    y_em = luminance_np(emitted.numpy().astype(np.float64))
+    return obs[keep].numpy().astype(np.float64), emitted.numpy().astype(np.float64)
+
+
+def matching_log_exposure(radiance: torch.Tensor, directions, observed, tau: float = 0.99) -> float:
+    """log of the factor that gives the emitter (H, W, 3) radiance, sampled in ``directions`` (N, 3),
+    the log-average luminance of the observed (N, 3) radiance; saturated observations are left out.
+    0 when nothing is observed."""
+    pair = _unsaturated_pairs(radiance, directions, observed, tau)
+    if pair is None:
+        return 0.0
+    y_obs, y_em = luminance_np(pair[0]), luminance_np(pair[1])
     return float(np.log(y_obs + LOG_EPS).mean() - np.log(y_em + LOG_EPS).mean())
 
 
@@ -107,13 +115,10 @@ def matching_white_balance(radiance: torch.Tensor, directions, observed, tau: fl
     colour of the observed (N, 3) radiance there: per channel, log-average observed minus
     log-average emitted, minus their mean (so the level stays the exposure's), clipped to
     +-:data:`MAX_START_WHITE_BALANCE`. Zeros when nothing unsaturated is observed."""
-    obs = torch.as_tensor(observed, dtype=torch.float32)
-    dirs = torch.as_tensor(directions, dtype=torch.float32)
-    keep = obs.amax(-1) < tau
-    if not bool(keep.any()):
+    pair = _unsaturated_pairs(radiance, directions, observed, tau)
+    if pair is None:
         return np.zeros(3)
-    emitted = sample_equirect(radiance.detach().float().cpu().permute(2, 0, 1)[None], dirs[keep])[0].T
-    o = np.log(obs[keep].numpy().astype(np.float64) + LOG_EPS).mean(0)
-    e = np.log(emitted.numpy().astype(np.float64) + LOG_EPS).mean(0)
+    o = np.log(pair[0] + LOG_EPS).mean(0)
+    e = np.log(pair[1] + LOG_EPS).mean(0)
     c = (o - e) - (o - e).mean()
     return np.clip(c, -MAX_START_WHITE_BALANCE, MAX_START_WHITE_BALANCE)
