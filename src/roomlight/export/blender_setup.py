@@ -51,24 +51,28 @@ def roomlight_to_blender(info: dict):
     return info["light"].matrix_world.copy()
 
 
+def _material_nodes(obj):
+    """Every shader node of the object's node-based materials."""
+    for slot in obj.material_slots:
+        mat = slot.material
+        if mat is not None and mat.use_nodes:
+            yield from mat.node_tree.nodes
+
+
 def _emissive_strength(obj) -> None:
     """The light emits its texture times the exported strength: the glTF importer sets the strength
     from ``KHR_materials_emissive_strength``, the USD importer sets 1 (the texture is the float
     radiance); a strength of 0 (an importer that drops it) is set to 1."""
-    for slot in obj.material_slots:
-        mat = slot.material
-        if mat is None or not mat.use_nodes:
-            continue
-        for node in mat.node_tree.nodes:
-            if node.type == "BSDF_PRINCIPLED":
-                emission = node.inputs.get("Emission Color") or node.inputs.get("Emission")
-                if emission is not None and emission.is_linked:
-                    if node.inputs["Emission Strength"].default_value == 0.0:
-                        node.inputs["Emission Strength"].default_value = 1.0
-                    # nothing but emission: the light is not lit by itself
-                    node.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-                    if "Specular IOR Level" in node.inputs:
-                        node.inputs["Specular IOR Level"].default_value = 0.0
+    for node in _material_nodes(obj):
+        if node.type == "BSDF_PRINCIPLED":
+            emission = node.inputs.get("Emission Color") or node.inputs.get("Emission")
+            if emission is not None and emission.is_linked:
+                if node.inputs["Emission Strength"].default_value == 0.0:
+                    node.inputs["Emission Strength"].default_value = 1.0
+                # nothing but emission: the light is not lit by itself
+                node.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+                if "Specular IOR Level" in node.inputs:
+                    node.inputs["Specular IOR Level"].default_value = 0.0
 
 
 def _float_texture(obj, exr: Path) -> bool:
@@ -81,16 +85,12 @@ def _float_texture(obj, exr: Path) -> bool:
     image = bpy.data.images.load(str(exr), check_existing=True)
     image.colorspace_settings.name = "Non-Color"
     done = False
-    for slot in obj.material_slots:
-        mat = slot.material
-        if mat is None or not mat.use_nodes:
-            continue
-        for node in mat.node_tree.nodes:
-            if node.type == "TEX_IMAGE":
-                node.image = image
-                done = True
-            elif node.type == "BSDF_PRINCIPLED":
-                node.inputs["Emission Strength"].default_value = 1.0
+    for node in _material_nodes(obj):
+        if node.type == "TEX_IMAGE":
+            node.image = image
+            done = True
+        elif node.type == "BSDF_PRINCIPLED":
+            node.inputs["Emission Strength"].default_value = 1.0
     return done
 
 
