@@ -14,6 +14,23 @@ def star_depth(h, w, seed=0, dtype=torch.float64):
     return 0.5 + 3.0 * torch.rand(h, w, generator=g, dtype=dtype)
 
 
+def veni_d_depth(h, w, seed=0, dtype=torch.float64):
+    """The depth VENI+D decodes from a random latent (untrained network, scaled to a room)."""
+    from roomlight.model.normalization import Normalization
+    from roomlight.model.veni import VeniConfig, VeniVAE
+
+    torch.manual_seed(seed)
+    cfg = VeniConfig(resolution=(h, w), latent_vectors=4, depth=True, channels=8, invariants=2, blocks=1, heads=2,
+                     field_width=16, field_blocks=1)
+    m = VeniVAE(cfg, Normalization(mean=(0.3, 0.3, 0.3, 1.0), std=(0.5, 0.5, 0.5, 0.5))).to(dtype)
+    with torch.no_grad():
+        return m.decode(torch.randn(1, cfg.latent_dim, dtype=dtype))[1][0, 0]
+
+
+#: The depth maps every mesh test runs on: random ones and VENI+D's decodings.
+DEPTHS = pytest.mark.parametrize("depth_of", [star_depth, veni_d_depth], ids=["random", "veni-d"])
+
+
 def weld(vertices, faces, decimals=9):
     """Merge coincident vertices (seam and pole duplicates) -> welded faces."""
     key = torch.round(vertices * 10**decimals).to(torch.int64)
@@ -21,10 +38,11 @@ def weld(vertices, faces, decimals=9):
     return inverse[faces]
 
 
+@DEPTHS
 @pytest.mark.parametrize("hw", [(2, 4), (5, 10), (16, 32)])
-def test_welded_mesh_is_closed_and_consistently_oriented(hw):
+def test_welded_mesh_is_closed_and_consistently_oriented(hw, depth_of):
     h, w = hw
-    depth = star_depth(h, w)
+    depth = depth_of(h, w)
     mesh = build_area_light(torch.rand(h, w, 3, dtype=torch.float64), depth)
     assert mesh.faces.shape == (2 * h * w, 3)
     assert mesh.vertices.shape == (h * (w + 1) + 2 * w, 3)
@@ -42,18 +60,20 @@ def test_welded_mesh_is_closed_and_consistently_oriented(hw):
     assert nv - len(edges) // 2 + f.shape[0] == 2
 
 
-def test_faces_point_towards_the_capture_point():
+@DEPTHS
+def test_faces_point_towards_the_capture_point(depth_of):
     h, w = 16, 32
-    v = area_light_vertices(star_depth(h, w, seed=3))
+    v = area_light_vertices(depth_of(h, w, seed=3))
     f = area_light_topology(h, w).faces
     n = torch.linalg.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     centroid = v[f].mean(1)
     assert ((n * centroid).sum(-1) < 0).all()
 
 
-def test_vertices_are_depth_times_direction_and_poles_are_ring_centroids():
+@DEPTHS
+def test_vertices_are_depth_times_direction_and_poles_are_ring_centroids(depth_of):
     h, w = 6, 12
-    depth = star_depth(h, w, seed=1)
+    depth = depth_of(h, w, seed=1)
     v = area_light_vertices(depth)
     grid = v[: h * (w + 1)].reshape(h, w + 1, 3)
     ref = depth[..., None] * pixel_directions(h, w, dtype=torch.float64)

@@ -233,3 +233,58 @@ def test_eval_prior_names_the_latent_fit_objective(eval_cli, tmp_path):
     assert "(the paper's protocol)" in report_markdown(rep)
     res = CliRunner().invoke(cli, args + ["--set", "peak_weight=-1"])
     assert res.exit_code != 0 and ">= 0" in res.output and "Traceback" not in res.output
+
+
+def _sphere_laplacian(h: int, w: int) -> torch.Tensor:
+    """(HW, HW) graph Laplacian of the smoothness prior's neighbour pairs, built pair by pair."""
+    pairs = []
+    for i in range(h):
+        for j in range(w):
+            pairs.append((i * w + j, i * w + (j + 1) % w))       # longitude, wrapping
+            if i + 1 < h:
+                pairs.append((i * w + j, (i + 1) * w + j))       # latitude
+    for j in range(w // 2):                                      # across the poles: j <-> j + W/2
+        pairs.append((j, j + w // 2))
+        pairs.append(((h - 1) * w + j, (h - 1) * w + j + w // 2))
+    lap = torch.zeros(h * w, h * w, dtype=torch.float64)
+    for a, b in pairs:
+        lap[a, a] += 1
+        lap[b, b] += 1
+        lap[a, b] -= 1
+        lap[b, a] -= 1
+    return lap
+
+
+def test_pixel_level_fit_reaches_the_closed_form_minimiser():
+    """Objective per channel: w_c mean (x - t)^2 + λ x^T L x / (HW); its minimiser solves
+    (w_c I + λ L) x = w_c t, with L the Laplacian of the neighbour pairs (written out above)."""
+    from roomlight.fit.pixel import fit_pixels
+
+    torch.manual_seed(5)
+    h, w = 4, 8
+    norm = Normalization(mean=(0.2, 0.2, 0.2, 1.0), std=(0.6, 0.6, 0.6, 0.3))
+    rad = torch.rand(1, 3, h, w) * 3
+    dep = 1 + torch.rand(1, 1, h, w)
+    lam = 0.2
+    res = fit_pixels(rad, dep, LatentFitConfig(steps=1500, target="both", lr=0.05, lr_final=0.001),
+                     normalization=norm, smoothness_weight=lam)
+    target = norm.normalize(rad, dep)[0].double().reshape(4, -1)
+    lap = _sphere_laplacian(h, w)
+    for c in range(4):
+        wc = 0.25
+        ref = torch.linalg.solve(wc * torch.eye(h * w, dtype=torch.float64) + lam * lap, wc * target[c])
+        torch.testing.assert_close(res.z[0, c].double().reshape(-1), ref, atol=2e-3, rtol=0)
+    # without the smoothness term the fit is the target itself; radiance-only fits decode no depth
+    free = fit_pixels(rad, None, LatentFitConfig(steps=300, target="radiance"), normalization=norm,
+                      smoothness_weight=0.0)
+    assert free.depth is None and float(psnr(to_ldr(free.radiance, rad), to_ldr(rad)).mean()) > 60
+
+
+def test_pixel_level_rows_in_the_report(setup):
+    _, ds, model = setup
+    rep = evaluate_prior(model, ds, LatentFitConfig(steps=10), batch_size=4, progress=False, note=lambda m: None,
+                         pixel_smoothness=0.05)
+    assert list(rep["rows"]) == ["encoder", "latent fit", "pixel level (HDR)", "pixel level (HDRD)"]
+    assert "abs_rel" not in rep["rows"]["pixel level (HDR)"] and "abs_rel" in rep["rows"]["pixel level (HDRD)"]
+    md = report_markdown(rep)
+    assert "| pixel level (HDR) |" in md and md.count("—") >= 1 and "0.05 × the smoothness prior" in md

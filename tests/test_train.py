@@ -15,7 +15,8 @@ from click.testing import CliRunner
 from roomlight.data import write_toy_dataset
 from roomlight.errors import RoomlightError
 from roomlight.eval.metrics import psnr, to_ldr
-from roomlight.model import PRESETS, PanoVAE
+from roomlight.model import PanoVAE
+from roomlight.model.families import ALL_PRESETS
 from roomlight.train import (TRAIN_PRESETS, Trainer, TrainConfig, TrainingError, config_differences,
                              get_train_preset, latest_checkpoint, learning_rate, resolve_run_model)
 from roomlight.train.checkpoint import optimizer_from_tensors, optimizer_to_tensors
@@ -216,7 +217,7 @@ def test_learning_rate_schedule():
 
 def test_config_presets_serialisation_and_differences():
     for name, cfg in TRAIN_PRESETS.items():
-        assert cfg.model_config == PRESETS[name]
+        assert cfg.model_config == ALL_PRESETS[name]
         assert TrainConfig.from_dict(json.loads(json.dumps(cfg.to_dict()))) == cfg
     d = TRAIN_PRESETS["default"]
     assert (d.batch_size, d.lr, d.min_lr, d.warmup_steps, d.betas, d.weight_decay, d.grad_clip, d.epochs) == \

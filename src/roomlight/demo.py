@@ -55,8 +55,9 @@ class DemoConfig(StrictConfig):
 
 def bundled_prior_path() -> Path | None:
     """The prior checkpoint shipped inside the package, if any."""
-    p = Path(__file__).parent / "assets" / "prior"
-    return p if (p / "model.safetensors").is_file() else None
+    from roomlight.model.bundled import bundled_model_path
+
+    return bundled_model_path("prior")
 
 
 def _room(cfg: DemoConfig, seed: int):

@@ -22,6 +22,8 @@ METHOD_TEXT = {
     "direct-al": "a 2.5D area light (radiance and depth) optimised pixel by pixel with a smoothness term",
     "prior-envmap": "the learned prior's decoding shown as an env map (its depth ignored)",
     "prior": "the learned prior's latent (and an exposure) optimised; its decoding is a 2.5D area light",
+    "veni": "VENI, a rotation-equivariant env-map prior, its latent (and an exposure) optimised; light at infinity",
+    "veni-d": "VENI+D, VENI with a depth output, its latent optimised; its decoding is a 2.5D area light",
     "oracle": "not a fit: the ground-truth emitter re-rendered, the noise floor of the metrics",
 }
 

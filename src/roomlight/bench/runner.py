@@ -282,6 +282,14 @@ def known_methods() -> tuple[str, ...]:
     return tuple(METHODS)
 
 
+def default_methods() -> tuple[str, ...]:
+    """The methods ``bench run`` fits without ``--methods``: every one but the VENI rows, which are
+    asked for by name (``--methods ...,veni,veni-d``) since they load models of their own."""
+    from roomlight.inverse.methods import VENI_METHODS
+
+    return tuple(m for m in known_methods() if m not in VENI_METHODS)
+
+
 def check_run_file(out: Path, settings: dict, keys) -> None:
     """Refuse a results folder whose ``run.json`` was written with other values of ``keys`` (the
     settings that change what a case computes), then record ``settings`` there."""
@@ -337,7 +345,7 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
         if bad:
             raise BenchError(f"--methods: unknown method(s) {', '.join(bad)}; choose from "
                              f"{', '.join(allowed + (ORACLE,))}")
-    methods = tuple(methods) if methods else known_methods()
+    methods = tuple(methods) if methods else default_methods()
     bench = Path(bench_dir).resolve()
     out = Path(out_dir)
     list_cases(bench, methods, shard)  # a broken benchmark is refused before anything is written

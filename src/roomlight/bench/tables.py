@@ -21,7 +21,7 @@ __all__ = ["METRIC_LABELS", "METHOD_ORDER", "MATERIAL_ORDER", "VIEWS", "ordered"
 
 METRIC_LABELS = {"psnr_ldr": "PSNR LDR ↑", "rmse_hdr": "RMSE HDR ↓", "angular_error": "RGB angular error (°) ↓"}
 #: Row order of the table (the paper's: smoothness baselines, then the priors); others follow.
-METHOD_ORDER = ("direct-envmap", "direct-sphere", "direct-al", "prior-envmap", "prior", "oracle")
+METHOD_ORDER = ("direct-envmap", "direct-sphere", "direct-al", "veni", "prior-envmap", "veni-d", "prior", "oracle")
 MATERIAL_ORDER = ("diffuse", "matte", "mirror")
 VIEWS = ("eval", "input")
 

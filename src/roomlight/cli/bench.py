@@ -120,10 +120,11 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
 
     cfg = fit_config(preset, iterations=iterations, spp=fit_spp, **parse_sets(sets))
     method_list = _csv(methods)
-    from roomlight.bench.runner import known_methods
-    from roomlight.inverse.methods import needs_prior
+    from roomlight.bench.runner import default_methods
+    from roomlight.inverse.methods import VENI_METHODS, needs_prior
 
-    with_prior = [m for m in (method_list or known_methods()) if needs_prior(m)]
+    # the VENI methods load their own models (--set veni_model=..., veni_d_model=...)
+    with_prior = [m for m in (method_list or default_methods()) if needs_prior(m) and m not in VENI_METHODS]
     prior = model_name = None
     if with_prior:
         prior, model_name = load_prior(model, f"--methods {','.join(with_prior)}")

@@ -10,8 +10,9 @@ from roomlight.cli.common import fail, parse_sets, repair_options, sets_option
 
 
 @click.command("eval-prior")
-@click.option("--model", "model_path", required=True, type=click.Path(exists=True),
-              help="Model directory, training run (uses RUN/best) or the authors' run folder.")
+@click.option("--model", "model_path", required=True, type=click.Path(),
+              help="Model directory, training run (uses RUN/best), the authors' run folder, or a bundled model "
+                   "by name (prior, lite, veni, veni-d).")
 @click.option("--data", "data_dir", required=True, type=click.Path(exists=True, file_okay=False),
               help="Folder of panoramas with depth, or without it with --radiance-only (a test/ sub-folder "
                    "is used when present).")
@@ -28,6 +29,11 @@ from roomlight.cli.common import fail, parse_sets, repair_options, sets_option
               help="Latent fit: weight of a log-L1 term over the brightest 0.5 % of pixels (0: the paper's "
                    "protocol).")
 @click.option("--depth-only", is_flag=True, help="Add a depth-only latent-fit row.")
+@click.option("--pixel-level", is_flag=True,
+              help="Add the pixel-level rows (paper Tab. 1, 'Smooth. HDR' / 'Smooth. HDRD'): a free panorama fitted "
+                   "with the latent fit's settings and the smoothness prior (no bottleneck).")
+@click.option("--pixel-smoothness", type=float, default=None,
+              help="Smoothness weight of the pixel-level rows, per channel and pixel [default: 0.05].")
 @click.option("--limit", type=int, default=None, help="Evaluate at most this many panoramas.")
 @click.option("--radiance-only", is_flag=True,
               help="Panoramas without depth (real captures, .exr or .hdr): fit z to radiance alone and "
@@ -37,9 +43,11 @@ from roomlight.cli.common import fail, parse_sets, repair_options, sets_option
               help="Where eval_prior.md / .json go (default: the --model folder).")
 @repair_options
 @sets_option("LatentFitConfig of the latent-fit rows")
-def command(model_path, data_dir, split, fit_steps, fit_init, depth_weight, peak_weight, depth_only, radiance_only, limit, batch_size, out_dir,
-            clamp_negative, fill_nonfinite, sets):
-    """Reconstruction quality of the prior (paper Tab. 1): encoder pass and latent fit.
+def command(model_path, data_dir, split, fit_steps, fit_init, depth_weight, peak_weight, depth_only, pixel_level,
+            pixel_smoothness, radiance_only, limit, batch_size, out_dir, clamp_negative, fill_nonfinite, sets):
+    """Reconstruction quality of the prior (paper Tab. 1): encoder pass and latent fit (and, with
+    --pixel-level, the smoothness prior's pixel-level reference rows). Works for the panoramic VAE and
+    for VENI / VENI+D (a radiance-only VENI is fitted to radiance and has no AbsRel).
 
     Metrics: PSNR and SSIM on tone-mapped LDR (LPIPS too when its weights are available
     locally), PSNR on HDR, AbsRel on depth. Prints a Markdown table and writes it with a JSON
@@ -68,14 +76,24 @@ def command(model_path, data_dir, split, fit_steps, fit_init, depth_weight, peak
     if fit_steps > 0:
         fit = LatentFitConfig(steps=fit_steps, init_from_encoder=fit_init == "encoder", depth_weight=depth_weight,
                               peak_weight=peak_weight).override(**parse_sets(sets))
+    if pixel_smoothness is not None and not pixel_level:
+        raise click.UsageError("--pixel-smoothness sets the weight of the --pixel-level rows: add --pixel-level")
+    if pixel_level and fit is None:
+        raise click.UsageError("--pixel-level uses the latent fit's settings: give --fit-steps > 0")
+    from roomlight.fit.pixel import DEFAULT_SMOOTHNESS
+
+    smooth = (DEFAULT_SMOOTHNESS if pixel_smoothness is None else pixel_smoothness) if pixel_level else None
     report = evaluate_prior(model, ds, fit, batch_size=batch_size, depth_only_fit=depth_only,
-                            note=lambda m: click.echo(m, err=True), radiance_only=radiance_only)
+                            note=lambda m: click.echo(m, err=True), radiance_only=radiance_only,
+                            pixel_smoothness=smooth)
     if report["count"] == 0:
         no_depth = report["skipped"] and all("no depth" in s["reason"] for s in report["skipped"])
         fail(f"no usable panorama in {data_dir}"
              + ("; its files have no depth: evaluate them with --radiance-only" if no_depth else ""))
     report.update({"model": str(resolve_run_model(model_path)), "data": str(data_dir), "split": split})
-    out = Path(out_dir) if out_dir else Path(model_path)
+    # the default is beside the model, except for a bundled one (not the package's own folder)
+    out = Path(out_dir) if out_dir else (Path(model_path) if Path(model_path).exists() else
+                                         Path(f"eval-prior-{model_path}"))
     if out.is_file():
         out = out.parent
     md, js = write_report(report, out)

@@ -6,7 +6,7 @@ import click
 
 from roomlight.cli.common import default_of, load_prior, parse_sets
 from roomlight.inverse.config import FIT_PRESETS, FitConfig
-from roomlight.inverse.methods import METHODS, needs_prior
+from roomlight.inverse.methods import METHODS, VENI_METHODS, needs_prior
 
 _FAST = FIT_PRESETS["fast"]
 
@@ -57,8 +57,8 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     spec = load_scene(scene)
     cfg = fit_config(preset, **{**overrides, **parse_sets(sets)})
     prior = None
-    if needs_prior(method):
-        prior, _ = load_prior(model, f"--method {method}")
+    if needs_prior(method) and (method not in VENI_METHODS or model is not None):
+        prior, _ = load_prior(model, f"--method {method}")  # VENI methods: --model, else --set veni_model=...
     result = fit_scene(spec, method, cfg, out_dir=out_dir, model=prior, progress=not quiet)
     click.echo(f"{method}: best iteration {result.best_iteration} (fixed-seed loss {result.best_loss:.4g}) "
                f"in {result.seconds:.1f} s -> {out_dir}")

@@ -89,7 +89,7 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     for note in case.notes:
         click.echo(f"note: {note}", err=True)
     prior = None
-    if any(m.startswith("prior") for m in (method, *compare)):
+    if any(m.startswith("prior") for m in (method, *compare)) or (model is not None and method.startswith("veni")):
         prior, _ = load_prior(model, f"--method {method}")
         if view_encoder is not None:
             from roomlight.model.view_encoder import ViewEncoder

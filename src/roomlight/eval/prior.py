@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+from functools import partial
 from pathlib import Path
 
 import torch
@@ -25,6 +26,7 @@ from roomlight.eval.lpips import load_lpips
 from roomlight.color import to_display_at_key
 from roomlight.eval.metrics import abs_rel, peak_error_stops, psnr, psnr_hdr, ssim
 from roomlight.fit.latent import LatentFitConfig, fit_latent
+from roomlight.fit.pixel import fit_pixels
 
 __all__ = ["METRICS", "metric_digits", "panorama_metrics", "evaluate_prior", "report_markdown", "write_report"]
 
@@ -49,8 +51,8 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
 
     Args:
         pred_radiance, radiance: (B, 3, H, W) linear radiance (same exposure scale).
-        pred_depth, depth: (B, 1, H, W) radial depth, target > 0; ``depth`` None (a
-            radiance-only target) leaves ``abs_rel`` out.
+        pred_depth, depth: (B, 1, H, W) radial depth, target > 0; either None (a radiance-only
+            target or prior) leaves ``abs_rel`` out.
         lpips_fn: optional callable from :func:`roomlight.eval.lpips.load_lpips`.
     Returns:
         name -> (B,) float64 tensor, names as in :data:`METRICS` (``lpips_ldr`` only with lpips_fn).
@@ -60,7 +62,7 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
     out = {"psnr_ldr": psnr(ldr_p, ldr_t).cpu(), "ssim_ldr": ssim(ldr_p, ldr_t).cpu(),
            "psnr_hdr": psnr_hdr(pred_radiance, radiance).cpu(),
            "peak_stops": peak_error_stops(pred_radiance, radiance).cpu()}
-    if depth is not None:
+    if depth is not None and pred_depth is not None:  # a radiance-only prior (VENI) decodes no depth
         out["abs_rel"] = abs_rel(pred_depth, depth).cpu()
     if lpips_fn is not None:
         out["lpips_ldr"] = lpips_fn(ldr_p, ldr_t)
@@ -69,7 +71,7 @@ def panorama_metrics(pred_radiance, pred_depth, radiance, depth, lpips_fn=None) 
 
 def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFitConfig(), batch_size: int = 8,
                    depth_only_fit: bool = False, progress: bool = True, note=print,
-                   radiance_only: bool = False) -> dict:
+                   radiance_only: bool = False, pixel_smoothness: float | None = None) -> dict:
     """Score encoder reconstructions and latent fits over ``dataset``.
 
     Args:
@@ -82,7 +84,13 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         radiance_only: evaluate panoramas without depth (real captures): the encoder needs depth,
             so the only row is "latent fit (radiance)", z fitted to radiance alone (the dataset
             must be built with ``require_depth=False``); depth metrics are left out.
+        pixel_smoothness: add the pixel-level rows "pixel level (HDR)" and "pixel level (HDRD)": a free
+            panorama fitted with the latent fit's settings plus this smoothness weight
+            (:func:`roomlight.fit.pixel.fit_pixels`); they need the latent fit. None: no such rows.
         note: receives messages (skipped files, LPIPS availability).
+
+    A prior that decodes radiance only (VENI) has its latent fitted to the radiance (its rows carry
+    no AbsRel).
     Returns:
         ``{"count", "rows": {row: {metric: mean}}, "per_image": [...], "skipped": [...],
         "lpips": None or reason, "fit": LatentFitConfig dict}``.
@@ -103,14 +111,26 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
         rows = {"latent fit (radiance)": fit_config.override(target="radiance")}
     else:
         rows = {"encoder": None}
+        has_depth = getattr(model, "has_depth", True)
         if fit_config is not None:
-            rows["latent fit"] = fit_config
+            rows["latent fit"] = fit_config if has_depth else fit_config.override(target="radiance")
+            if depth_only_fit and not has_depth:
+                raise RoomlightError("the depth-only fit needs a prior that decodes depth (this one is VENI)")
             if depth_only_fit:
                 # Depth alone: no radiance, so no peak term and no encoder start (the encoder reads
                 # radiance): the supplementary's check, from z = 0. The lone channel gets weight 1, which
                 # is what any positive weight gives it, and keeps a --depth-weight 0 from emptying it.
                 rows["latent fit (depth only)"] = fit_config.override(target="depth", peak_weight=0.0,
                                                                       depth_weight=1.0, init_from_encoder=False)
+    pixel_rows = {}
+    if pixel_smoothness is not None:
+        if fit_config is None:
+            raise RoomlightError("the pixel-level rows use the latent fit's settings: they need the latent fit")
+        base = fit_config.override(init_from_encoder=False)
+        pixel_rows = {"pixel level (HDR)": base.override(target="radiance")}
+        if not radiance_only:
+            pixel_rows["pixel level (HDRD)"] = base.override(target="both")
+        rows.update(pixel_rows)
     per_image, skipped = [], []
     values: dict[str, dict[str, list]] = {r: {} for r in rows}
     # The bar counts work units: one per batch for the encoder pass, one per latent-fit step, so a
@@ -140,9 +160,10 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
                 bar.update(1)
             else:
                 bar.set_postfix_str(f"{row}, panoramas {done}-{done + len(batch['names'])} of {len(dataset)}")
-                res = fit_latent(model, rad if cfg.target != "depth" else None,
-                                 dep if cfg.target != "radiance" else None, cfg,
-                                 callback=lambda step, loss: bar.update(1))
+                fit = (partial(fit_pixels, normalization=model.normalization, smoothness_weight=pixel_smoothness)
+                       if row in pixel_rows else partial(fit_latent, model))
+                res = fit(rad if cfg.target != "depth" else None, dep if cfg.target != "radiance" else None, cfg,
+                          callback=lambda step, loss: bar.update(1))
                 pr, pd = res.radiance, res.depth
             m = panorama_metrics(pr, pd, rad, dep, lpips_fn)
             for k, v in m.items():
@@ -154,7 +175,8 @@ def evaluate_prior(model, dataset, fit_config: LatentFitConfig | None = LatentFi
     bar.close()
     means = {row: {k: _mean(v) for k, v in vals.items()} for row, vals in values.items()}
     return {"count": len(per_image), "rows": means, "per_image": per_image, "skipped": skipped,
-            "lpips": lpips_reason, "fit": fit_config.to_dict() if fit_config is not None else None}
+            "lpips": lpips_reason, "fit": fit_config.to_dict() if fit_config is not None else None,
+            "pixel_smoothness": pixel_smoothness}
 
 
 def _mean(v: list) -> float:
@@ -181,7 +203,7 @@ def report_markdown(report: dict, title: str = "Prior evaluation") -> str:
     lines.append("| | " + " | ".join(METRICS[k][0] for k in cols) + " |")
     lines.append("|---|" + "---:|" * len(cols))
     for row, vals in report["rows"].items():
-        cells = [f"{vals[k]:.{metric_digits(k)}f}" for k in cols if k in vals]
+        cells = [f"{vals[k]:.{metric_digits(k)}f}" if k in vals else "—" for k in cols]
         lines.append(f"| {row} | " + " | ".join(cells) + " |")
     lines.append("")
     if report.get("lpips"):
@@ -190,6 +212,10 @@ def report_markdown(report: dict, title: str = "Prior evaluation") -> str:
         # Reports written before the objective had weights lack those fields: their defaults apply.
         known = {k: v for k, v in report["fit"].items() if k in LatentFitConfig.__dataclass_fields__}
         lines.append(f"Latent fit: {LatentFitConfig(**known).describe()}.")
+    if report.get("pixel_smoothness") is not None:
+        lines.append(f"Pixel level: a free normalised panorama, the latent fit's optimiser and objective from the mean "
+                     f"panorama, plus {report['pixel_smoothness']:g} × the smoothness prior per channel and pixel; "
+                     "no bottleneck, so these rows measure that regularisation, not a representation.")
     lines.append("LDR: exposure so that the target's log-average luminance is 0.18, clip, gamma 2.2. "
                  "HDR PSNR: peak = the target's maximum. Peak error: |log2| of the ratio of the brightest "
                  "pixels' luminances (the strongest light). AbsRel: mean |D̂ − D| / D.")

@@ -88,8 +88,8 @@ ABLATION_PRESETS: dict[str, AblationConfig] = {
     "paper": AblationConfig(preset="default", steps=0, lr=2e-4, warmup_steps=250, synth_rooms=2500, synth_spp=144,
                             eval_panoramas=25, fit_steps=1500, bench_scenes=25, bench_image=256, bench_spp=1024,
                             fit_iterations=500, fit_spp=64, eval_spp=1024),
-    "tiny": AblationConfig(preset="tiny", steps=30, lr=2e-3, warmup_steps=5, synth_rooms=24, synth_spp=16,
-                           eval_panoramas=3, fit_steps=20, bench_scenes=1, bench_image=32, bench_spp=16,
+    "tiny": AblationConfig(preset="tiny", steps=30, lr=2e-3, warmup_steps=5, synth_rooms=10, synth_spp=16,
+                           eval_panoramas=2, fit_steps=20, bench_scenes=1, bench_image=32, bench_spp=16,
                            fit_iterations=2, fit_spp=4, eval_spp=16),
 }
 

@@ -39,7 +39,8 @@ __all__ = ["CostConfig", "COST_PRESETS", "PAPER_SCHEDULE", "run_cost", "device_d
 PAPER_SCHEDULE = (300, 2233, 32)
 METHOD_LABELS = {"prior": ("roomlight prior", "2.5D AL"), "prior-envmap": ("roomlight prior", "env map"),
                  "direct-al": ("Smoothness", "2.5D AL"), "direct-sphere": ("Smoothness", "sphere proxy"),
-                 "direct-envmap": ("Smoothness", "env map")}
+                 "direct-envmap": ("Smoothness", "env map"), "veni": ("VENI", "env map"),
+                 "veni-d": ("VENI+D", "2.5D AL")}
 
 
 @dataclass(frozen=True)

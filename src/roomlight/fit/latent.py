@@ -26,7 +26,7 @@ from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError, ShapeError
 from roomlight.losses.peak import peak_loss_per_sample
 
-__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS"]
+__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS", "FitProblem", "fit_problem", "optimise"]
 
 #: Which normalised channels enter the objective.
 TARGETS = {"both": (0, 1, 2, 3), "radiance": (0, 1, 2), "depth": (3,)}
@@ -121,6 +121,9 @@ def _check_inputs(model, radiance, depth, target):
         raise ShapeError(f"fit_latent: depth must be (B, 1, {h}, {w}), got {tuple(depth.shape)}")
     if target in ("both", "radiance") and radiance is None:
         raise RoomlightError(f"fit_latent: target {target!r} needs radiance")
+    if target != "radiance" and not getattr(model, "has_depth", True):
+        raise RoomlightError(f"fit_latent: target {target!r} needs a model that decodes depth; this one "
+                             "(VENI) decodes radiance only: fit target 'radiance'")
     if target in ("both", "depth") and depth is None:
         raise RoomlightError(f"fit_latent: target {target!r} needs depth (use target='radiance' for "
                              "panoramas without depth)")
@@ -155,19 +158,7 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
     norm = model.normalization
     if norm is None:
         raise RoomlightError("fit_latent: the model has no normalisation statistics")
-    ref = radiance if radiance is not None else depth
-    b, device = ref.shape[0], ref.device
-    h, w = model.config.resolution
-    # Missing channels get placeholders (excluded from the objective) so that normalize() applies.
-    rad = radiance if radiance is not None else torch.ones(b, 3, h, w, device=device)
-    dep = depth if depth is not None else torch.ones(b, 1, h, w, device=device)
-    channels = list(TARGETS[config.target])
-    weights = _channel_weights(config, channels, device).view(1, -1)  # (1, C)
-    with torch.no_grad():
-        x = norm.normalize(rad.float(), dep.float())[:, channels]
-        # Decoded radiance is never negative (denormalize clamps it), so the target's negative
-        # values are clamped too before the peak term ranks its brightest pixels.
-        rad_target = rad.float().clamp_min(0.0) if config.peak_weight > 0 else None
+    problem = fit_problem(norm, model.config.resolution, radiance, depth, config)
     was_training = model.training
     # Freeze the decoder for the fit, and give every parameter back the flag it had: a model
     # that is partly frozen (or being trained elsewhere) must come back exactly as it was.
@@ -181,35 +172,10 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
             if radiance is None or depth is None:
                 raise RoomlightError("fit_latent: init_from_encoder needs both radiance and depth")
             with torch.no_grad():
-                z0 = model.encode(rad.float(), dep.float()).mean
-        z = (z0.detach().clone() if z0 is not None else torch.zeros(b, model.config.latent_dim, device=device))
-        z = z.float().requires_grad_(True)
-        opt = torch.optim.Adam([z], lr=config.lr, betas=config.betas)
-        gamma = (config.lr_final / config.lr) ** (1.0 / max(config.steps, 1))
-        sched = torch.optim.lr_scheduler.ExponentialLR(opt, gamma)
-        best_z, best_loss = z.detach().clone(), torch.full((b,), math.inf, device=device)
-        history = []
-        for step in range(config.steps + 1):
-            x_full = model.decode_normalized(z)  # (B, 4, H, W)
-            x_hat = x_full[:, channels]
-            per = ((x_hat - x).pow(2).mean((2, 3)) * weights).sum(1)  # (B,) this iterate's objective
-            if rad_target is not None:
-                per = per + config.peak_weight * peak_loss_per_sample(norm.denormalize(x_full)[0], rad_target,
-                                                                      config.peak_fraction)
-            with torch.no_grad():
-                better = per < best_loss
-                best_loss = torch.where(better, per.detach(), best_loss)
-                best_z[better] = z.detach()[better]
-            if step % config.history_every == 0 or step == config.steps:
-                history.append((step, float(per.detach().mean())))
-            if step == config.steps:
-                break  # the last evaluation only scores the final iterate
-            opt.zero_grad(set_to_none=True)
-            per.sum().backward()
-            opt.step()
-            sched.step()
-            if callback is not None:
-                callback(step + 1, float(per.detach().mean()))
+                z0 = model.encode(problem.radiance, problem.depth).mean
+        b = problem.x.shape[0]
+        z = z0.detach().clone() if z0 is not None else torch.zeros(b, model.config.latent_dim, device=problem.x.device)
+        best_z, best_loss, history = optimise(z.float(), model.decode_normalized, problem, config, callback)
         with torch.no_grad():
             out_rad, out_dep = model.decode(best_z)
     finally:
@@ -217,6 +183,85 @@ def fit_latent(model, radiance: torch.Tensor | None, depth: torch.Tensor | None,
             p.requires_grad_(flag)
         model.train(was_training)
     return LatentFitResult(best_z, best_loss, out_rad, out_dep, history)
+
+
+@dataclass
+class FitProblem:
+    """What a fit reproduces, in the network's normalised space.
+
+    Attributes:
+        x: (B, C, H, W) the fitted channels of the normalised target.
+        channels: which of the four normalised channels ``x`` holds.
+        weights: (1, C) their weights, summing to 1.
+        radiance, depth: (B, 3, H, W), (B, 1, H, W) the targets (placeholders of 1 where missing).
+        peak_target: (B, 3, H, W) the radiance the peak term ranks, or None without a peak term.
+        normalization: the statistics, to reach linear radiance for the peak term.
+    """
+
+    x: torch.Tensor
+    channels: list
+    weights: torch.Tensor
+    radiance: torch.Tensor
+    depth: torch.Tensor
+    peak_target: torch.Tensor | None
+    normalization: object
+
+
+def fit_problem(norm, resolution, radiance, depth, config: LatentFitConfig) -> FitProblem:
+    """The :class:`FitProblem` of ``radiance`` / ``depth`` under ``config`` (target channels, weights)."""
+    ref = radiance if radiance is not None else depth
+    b, device = ref.shape[0], ref.device
+    h, w = resolution
+    # Missing channels get placeholders (excluded from the objective) so that normalize() applies.
+    rad = (radiance if radiance is not None else torch.ones(b, 3, h, w, device=device)).float()
+    dep = (depth if depth is not None else torch.ones(b, 1, h, w, device=device)).float()
+    channels = list(TARGETS[config.target])
+    weights = _channel_weights(config, channels, device).view(1, -1)  # (1, C)
+    with torch.no_grad():
+        x = norm.normalize(rad, dep)[:, channels]
+        # Decoded radiance is never negative (denormalize clamps it), so the target's negative
+        # values are clamped too before the peak term ranks its brightest pixels.
+        peak = rad.clamp_min(0.0) if config.peak_weight > 0 else None
+    return FitProblem(x, channels, weights, rad, dep, peak, norm)
+
+
+def optimise(params: torch.Tensor, decode, problem: FitProblem, config: LatentFitConfig, callback=None,
+             regularizer=None) -> tuple[torch.Tensor, torch.Tensor, list]:
+    """Adam on ``params`` (B, ...) so that ``decode(params)`` (B, >= C, H, W normalised) reproduces the
+    problem; each panorama's objective is the weighted mean squared error of its channels (+ the peak
+    term, + ``regularizer(params)`` (B,) if given). Returns (best params, their objective (B,), history)."""
+    p = params.detach().clone().requires_grad_(True)
+    opt = torch.optim.Adam([p], lr=config.lr, betas=config.betas)
+    gamma = (config.lr_final / config.lr) ** (1.0 / max(config.steps, 1))
+    sched = torch.optim.lr_scheduler.ExponentialLR(opt, gamma)
+    b = p.shape[0]
+    best_p, best_loss = p.detach().clone(), torch.full((b,), math.inf, device=p.device)
+    history = []
+    for step in range(config.steps + 1):
+        x_full = decode(p)  # (B, 4, H, W); a radiance-only decoder gives (B, 3, H, W)
+        per = ((x_full[:, problem.channels] - problem.x).pow(2).mean((2, 3)) * problem.weights).sum(1)  # (B,)
+        if problem.peak_target is not None:
+            if x_full.shape[1] == 3:
+                x_full = torch.cat([x_full, torch.zeros_like(x_full[:, :1])], 1)
+            per = per + config.peak_weight * peak_loss_per_sample(problem.normalization.denormalize(x_full)[0],
+                                                                  problem.peak_target, config.peak_fraction)
+        if regularizer is not None:
+            per = per + regularizer(p)
+        with torch.no_grad():
+            better = per < best_loss
+            best_loss = torch.where(better, per.detach(), best_loss)
+            best_p[better] = p.detach()[better]
+        if step % config.history_every == 0 or step == config.steps:
+            history.append((step, float(per.detach().mean())))
+        if step == config.steps:
+            break  # the last evaluation only scores the final iterate
+        opt.zero_grad(set_to_none=True)
+        per.sum().backward()
+        opt.step()
+        sched.step()
+        if callback is not None:
+            callback(step + 1, float(per.detach().mean()))
+    return best_p, best_loss, history
 
 
 #: Former names, kept importable; ``roomlight.inverse`` has its own ``FitConfig`` / ``FitResult``.

@@ -50,6 +50,10 @@ class FitConfig(StrictConfig):
     #: weight w of the pull to neutral, w |c|^2; chosen among 0.003, 0.03 and 0.3 on 12 scenes of rooms
     #: no benchmark uses (docs/inverse-rendering.md): the weakest lowered the probe's colour error most
     white_balance_weight: float = 0.003
+    #: The models of the ``veni`` and ``veni-d`` methods: a bundled model's name, a model folder or a run
+    #: (``--model`` takes their place when it is a VENI model of the method's kind).
+    veni_model: str = "veni"
+    veni_d_model: str = "veni-d"
     pixel_subset: float = 1.0             #: fraction of object pixels in the loss each step
     eval_every: int = 10                  #: best-iterate check period (fixed-seed re-evaluation)
     eval_spp: int | None = None           #: spp of the best-iterate check (default: spp)

@@ -3,6 +3,8 @@
 =================  ======================================================================
 ``prior``          z + log-exposure (+ white balance) through the 2.5D area light (the paper's method)
 ``prior-envmap``   the same prior, its radiance shown at infinity (env-map-prior comparison)
+``veni``           z + exposure of VENI, the rotation-equivariant env-map prior (radiance at infinity)
+``veni-d``         z + exposure of VENI+D, the same with depth, through the 2.5D area light
 ``direct-al``      free log radiance + log depth, 2.5D area light, smoothness prior
 ``direct-sphere``  free log radiance on a sphere proxy enclosing all objects (+20 %)
 ``direct-envmap``  free log radiance as an env map
@@ -20,13 +22,15 @@ from roomlight.inverse.config import FitConfig
 from roomlight.inverse.fitter import FitResult, Fitter, mask_window
 from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
 
-__all__ = ["METHODS", "PRIOR_METHODS", "needs_prior", "make_light", "enclosing_sphere_radius", "repulsion_object_ids",
+__all__ = ["METHODS", "PRIOR_METHODS", "VENI_METHODS", "needs_prior", "method_model", "make_light", "enclosing_sphere_radius", "repulsion_object_ids",
            "build_fitter", "fit_scene"]
 
 #: Every method, in the table's order, and whether it fits the latent of a trained prior
 #: (and so needs ``--model``) rather than free per-pixel maps.
-_NEEDS_PRIOR = {"prior": True, "prior-envmap": True, "direct-al": False, "direct-sphere": False,
-                "direct-envmap": False}
+_NEEDS_PRIOR = {"prior": True, "prior-envmap": True, "veni": True, "veni-d": True, "direct-al": False,
+                "direct-sphere": False, "direct-envmap": False}
+#: The methods of the VENI models, and whether the method shows the light at infinity.
+VENI_METHODS = {"veni": True, "veni-d": False}
 METHODS = tuple(_NEEDS_PRIOR)
 PRIOR_METHODS = tuple(m for m, prior in _NEEDS_PRIOR.items() if prior)
 
@@ -44,14 +48,48 @@ def enclosing_sphere_radius(scene, margin: float = 0.2) -> float:
     return r * (1.0 + margin)
 
 
+def method_model(method: str, config: FitConfig, model=None):
+    """The model a prior method fits: for ``prior`` / ``prior-envmap`` the given one (a PanoVAE); for
+    ``veni`` / ``veni-d`` the given one when it is a VENI model of the method's kind (without / with
+    depth), else the one ``config.veni_model`` / ``config.veni_d_model`` names (loaded once per process)."""
+    from roomlight.model.families import is_veni
+
+    if method in VENI_METHODS:
+        wants_depth = not VENI_METHODS[method]
+        if is_veni(model) and model.has_depth == wants_depth:
+            return model
+        return _load_named(config.veni_d_model if wants_depth else config.veni_model)
+    if is_veni(model):
+        raise RoomlightError(f"method {method!r} fits the panoramic VAE; {model.config} is a VENI model "
+                             "(use --method veni or veni-d with it)")
+    return model
+
+
+_LOADED: dict = {}
+
+
+def _load_named(name: str):
+    """A VENI model by name or path, on the renderer's device, loaded once."""
+    from roomlight.model.runs import load_run_model, resolve_run_model
+    from roomlight.render.variant import torch_device
+
+    device = torch_device()
+    key = (str(resolve_run_model(name)), device)
+    if key not in _LOADED:
+        _LOADED[key] = load_run_model(name, device=device)
+    return _LOADED[key]
+
+
 def make_light(method: str, scene, config: FitConfig, model=None) -> LightModel:
-    """The light model of a method (``model``: a PanoVAE, needed by the prior methods)."""
+    """The light model of a method (``model``: the prior, needed by the prior methods; see :func:`method_model`)."""
     if method not in METHODS:
         raise RoomlightError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if needs_prior(method):
+        model = method_model(method, config, model)
         if model is None:
             raise RoomlightError(f"method {method!r} needs a trained prior: pass --model RUN_OR_CHECKPOINT")
-        return PriorLight(model, envmap=method == "prior-envmap", init_exposure=config.init_exposure,
+        envmap = method == "prior-envmap" or VENI_METHODS.get(method, False)
+        return PriorLight(model, envmap=envmap, init_exposure=config.init_exposure,
                           z_prior=config.z_prior, fit_depth_scale=config.fit_depth_scale,
                           white_balance=config.white_balance_weight if config.white_balance else None)
     radius = enclosing_sphere_radius(scene, config.sphere_margin)

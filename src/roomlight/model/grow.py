@@ -31,7 +31,7 @@ NEW_MEAN_SCALE = 1e-2
 
 def can_grow(source: ModelConfig, target: ModelConfig) -> bool:
     """True when ``target`` is ``source`` with a latent at least as large and nothing else changed."""
-    if target.latent_dim < source.latent_dim:
+    if not (isinstance(source, ModelConfig) and isinstance(target, ModelConfig)) or target.latent_dim < source.latent_dim:
         return False
     return source.override(latent_dim=target.latent_dim) == target
 

@@ -47,14 +47,24 @@ def latest_checkpoint(run_dir: str | Path) -> Path | None:
 
 
 def resolve_run_model(path: str | Path) -> Path:
-    """Directory to pass to ``PanoVAE.from_pretrained`` for ``--model PATH``.
+    """Directory to load for ``--model PATH``.
 
     ``PATH`` may be a model directory itself (``config.json`` + ``model.safetensors``, or the
-    authors' run folder), or a training run: then ``RUN/best``, else its newest checkpoint.
+    authors' run folder), a training run (then ``RUN/best``, else its newest checkpoint), or, when
+    no such path exists, the name of a bundled model (:mod:`roomlight.model.bundled`).
     """
     p = Path(path)
     if not p.exists():
-        raise InputFileError(p, "no such file or directory", "pass a model directory or a training run")
+        from roomlight.model.bundled import BUNDLED_MODELS, bundled_model_path
+
+        if str(path) in BUNDLED_MODELS:
+            bundled = bundled_model_path(str(path))
+            if bundled is None:
+                raise InputFileError(p, f"the bundled model {str(path)!r} is not part of this installation",
+                                     "pass a model directory or a training run")
+            return bundled
+        raise InputFileError(p, "no such file or directory",
+                             f"pass a model directory, a training run or a bundled model ({', '.join(BUNDLED_MODELS)})")
     if p.is_file() or (p / "model.safetensors").exists() or (p / "config.yaml").exists():
         return p
     for cand in (p / "best", p / "best.old"):
@@ -69,10 +79,13 @@ def resolve_run_model(path: str | Path) -> Path:
 
 
 def load_run_model(path: str | Path, device: str | None = None):
-    """``PanoVAE.from_pretrained(resolve_run_model(path))`` on ``device`` (default: CUDA if available)."""
+    """The model at ``resolve_run_model(path)`` (a PanoVAE, or VENI / VENI+D by its config.json) on
+    ``device`` (default: CUDA if available)."""
+    from roomlight.model.families import load_model
+
     if device is None:
         device = "cuda" if torch.cuda.is_available() else "cpu"
-    return PanoVAE.from_pretrained(resolve_run_model(path), device=device)
+    return load_model(resolve_run_model(path), device=device)
 
 
 def convert_authors_checkpoint(run_dir: str | Path, out_dir: str | Path) -> Path:

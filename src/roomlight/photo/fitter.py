@@ -35,7 +35,9 @@ from roomlight.photo.materials import ObjectMaterials
 __all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
 
 #: The methods a photograph can be fitted with: the 2.5D prior and the two env-map baselines.
-PHOTO_METHODS = ("prior", "prior-envmap", "direct-envmap")
+#: The methods that fit a latent, and how their light is shown: as the 2.5D area light or at infinity.
+LATENT_METHODS = {"prior": "mesh", "prior-envmap": "envmap", "veni": "envmap", "veni-d": "mesh"}
+PHOTO_METHODS = (*LATENT_METHODS, "direct-envmap")
 #: The resumable state of a fit in progress, inside the output folder.
 STATE_FILE = ".fit-state.safetensors"
 
@@ -155,22 +157,27 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
 
     base = level_transform(case)
     obs_room_dirs = base.directions(geometry.frustum.rays)
-    if method in ("prior", "prior-envmap"):
+    if method in LATENT_METHODS:
+        from roomlight.inverse.methods import method_model
+
+        model = method_model(method, config, model)
         if model is None:
             raise RoomlightError(f"method {method!r} needs a trained prior (--model)")
+        as_mesh = LATENT_METHODS[method] == "mesh"
         z0, start = start_latent(config.init, model, case, config)
-        light = PriorLight(model, envmap=method == "prior-envmap", init_exposure=1.0, z_prior=config.z_prior,
+        light = PriorLight(model, envmap=not as_mesh, init_exposure=1.0, z_prior=config.z_prior,
                            white_balance=config.white_balance_weight if config.white_balance else None)
         with torch.no_grad():
             light.z.copy_(z0.to(light.z.device))
             rad, depth = model.decode(z0[None].to(next(model.parameters()).device))
-            rad, depth = rad[0].permute(1, 2, 0).cpu(), depth[0, 0].cpu()
-        if method == "prior" and start["init"] == "view":
+            rad = rad[0].permute(1, 2, 0).cpu()
+            depth = None if depth is None else depth[0, 0].cpu()
+        if as_mesh and start["init"] == "view":
             # The view encoder decodes the room around the camera, in the photograph's metres: the
             # camera is its centre. (Placing the scene anew would let it shrink the photograph into
             # a patch of wall that fits its depths better: seen at 0.2x scale, 2 m off centre.)
             transform, dirs = base, obs_room_dirs
-        elif method == "prior":
+        elif as_mesh:
             repelled = np.concatenate([geometry.object_points, geometry.free_points])
             transform = place_scene(depth, base.rotation, geometry.frustum.points, repelled, config.margin,
                                     config.lambda_rep, config.placement_steps)
@@ -218,7 +225,8 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     """Fit the light and the objects' materials of a :class:`~roomlight.photo.case.PhotoCase`.
 
     Args:
-        method: ``prior`` (2.5D light from the prior), ``prior-envmap`` or ``direct-envmap``.
+        method: ``prior`` (2.5D light from the prior), ``prior-envmap``, ``veni`` (env map),
+            ``veni-d`` (2.5D light from VENI+D) or ``direct-envmap``.
         config: the settings (default: the paper's).
         model: the prior (a PanoVAE) for the prior methods.
         out_dir: where ``history.jsonl`` and the resumable state go (other outputs:

@@ -97,6 +97,9 @@ def start_latent(mode: str, model, case, config) -> tuple[torch.Tensor, dict]:
     mode = resolve_start(mode, model)
     if mode == "view":
         z, _, info = view_latent(model, case)
+    elif mode == "samples" and not getattr(model, "has_depth", True):
+        # the draws are ranked by the depth of their rooms; a radiance-only prior (VENI) has none
+        z, info = torch.zeros(model.config.latent_dim), {"note": "no depth to rank draws by: the zero latent"}
     elif mode == "samples":
         z, medians = initial_latent(model, config.init_samples, config.seed)
         info = {"latent_draws": len(medians), "median_depths": [round(m, 4) for m in medians]}

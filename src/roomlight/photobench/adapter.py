@@ -21,7 +21,7 @@ from roomlight.errors import RoomlightError
 __all__ = ["FIT_PHOTO_METHODS", "START_VARIANTS", "PHOTO_FIT_METHODS", "fit_photo_case"]
 
 #: The methods of ``roomlight fit-photo``.
-FIT_PHOTO_METHODS = ("prior", "prior-envmap", "direct-envmap")
+FIT_PHOTO_METHODS = ("prior", "prior-envmap", "veni", "veni-d", "direct-envmap")
 #: ``prior`` with a fixed start (``fit-photo --init``): the rows that split the photo fit's gap.
 #: (``prior`` itself starts as fit-photo does by default: from the view encoder when the prior has one.)
 START_VARIANTS = {"prior-view": "view", "prior-samples": "samples", "prior-zero": "zero"}

@@ -38,7 +38,7 @@ __all__ = ["collect_photo_results", "probe_records", "material_records", "materi
            "PHOTO_METHOD_ORDER"]
 
 #: Row order: the baselines, the prior, then the references.
-PHOTO_METHOD_ORDER = ("naive-paste", "direct-envmap", "prior-envmap", "prior-samples", "prior-zero", "prior-view",
+PHOTO_METHOD_ORDER = ("naive-paste", "direct-envmap", "veni", "prior-envmap", "veni-d", "prior-samples", "prior-zero", "prior-view",
                       "prior", "prior-ceiling", "oracle-envmap", "oracle")
 #: The steps from the oracle light down to the photo fit: (method, the reference it is compared with).
 GAP_STEPS = (("prior-ceiling", "oracle", "the prior's capacity: its best latent for the whole room vs the room"),

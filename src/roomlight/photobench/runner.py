@@ -57,7 +57,7 @@ ORACLES = {"oracle": "mesh", "oracle-envmap": "envmap"}
 #: (:mod:`roomlight.photobench.ceiling`). Their lights live in the oracle's frame.
 REFERENCES = tuple(ORACLES) + (CEILING, NAIVE)
 KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
-DEFAULT_METHODS = FIT_PHOTO_METHODS
+DEFAULT_METHODS = tuple(m for m in FIT_PHOTO_METHODS if not m.startswith("veni"))  # VENI rows: by name
 #: Samples per pixel of the scoring renders.
 DEFAULT_EVAL_SPP = 256
 RESULT = "result.json"

@@ -18,7 +18,9 @@ from dataclasses import dataclass, field
 from roomlight.config import StrictConfig, checked_fields
 from roomlight.errors import RoomlightError
 from roomlight.losses import LossConfig
-from roomlight.model.config import ModelConfig, get_preset
+from roomlight.model.config import ModelConfig
+from roomlight.model.families import model_preset
+from roomlight.model.veni import VeniConfig
 
 __all__ = ["TrainConfig", "TRAIN_PRESETS", "get_train_preset", "RESUME_SAFE_FIELDS", "config_differences"]
 
@@ -115,7 +117,7 @@ class TrainConfig(StrictConfig):
         def bad(name: str, why: str):
             return RoomlightError(f"TrainConfig.{name} = {getattr(self, name)!r}: {why}")
 
-        get_preset(self.model)  # raises for unknown presets
+        model_preset(self.model)  # raises for unknown presets
         self.model_config  # unknown or mistyped model_overrides are refused with the field's name
         for name in ("batch_size", "log_every", "ckpt_every", "val_batches", "keep_checkpoints"):
             if getattr(self, name) <= 0:
@@ -145,10 +147,11 @@ class TrainConfig(StrictConfig):
 
     # ------------------------------------------------------------------ derived
     @property
-    def model_config(self) -> ModelConfig:
-        """The architecture of the preset named by :attr:`model`, with :attr:`model_overrides` applied."""
+    def model_config(self) -> ModelConfig | VeniConfig:
+        """The architecture of the preset named by :attr:`model` (a PanoVAE or a VENI preset), with
+        :attr:`model_overrides` applied."""
         try:
-            return get_preset(self.model).override(**self.model_overrides)
+            return model_preset(self.model).override(**self.model_overrides)
         except RoomlightError as exc:
             raise RoomlightError(f"TrainConfig.model_overrides: {exc}") from None
 
@@ -194,6 +197,11 @@ TRAIN_PRESETS: dict[str, TrainConfig] = {
         num_workers=0, log_every=5, val_every=50, val_batches=4, ckpt_every=50, image_every=0,
     ),
 }
+# VENI and VENI+D train with the lite prior's recipe and objective (the comparison is of architectures);
+# VENI's objective has no depth terms, since its reconstructions carry the input's depth through.
+for _name in ("veni", "veni-d"):
+    TRAIN_PRESETS[_name] = dataclasses.replace(TRAIN_PRESETS["lite"], model=_name)
+    TRAIN_PRESETS[f"{_name}-tiny"] = dataclasses.replace(TRAIN_PRESETS["tiny"], model=f"{_name}-tiny")
 
 
 def get_train_preset(name: str) -> TrainConfig:

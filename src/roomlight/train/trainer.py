@@ -34,6 +34,7 @@ from roomlight.data import (PackedCache, PanoramaDataset, ResumableBatchSampler,
 from roomlight.errors import RoomlightError
 from roomlight.losses import vae_loss
 from roomlight.model import Normalization, PanoVAE
+from roomlight.model.families import build_model
 from roomlight.model.grow import can_grow, grow_latent_state
 from roomlight.train import checkpoint as ck
 from roomlight.train.config import TrainConfig, config_differences
@@ -179,7 +180,7 @@ class Trainer:
         barrier(self.dist)
         norm = Normalization.from_dict(json.loads(norm_path.read_text()))
         torch.manual_seed(cfg.seed)  # identical initial weights on every rank and every fresh run
-        self.model = PanoVAE(cfg.model_config, norm, {"depth_units": cfg.depth_units, "source": "roomlight train"})
+        self.model = build_model(cfg.model_config, norm, {"depth_units": cfg.depth_units, "source": "roomlight train"})
         if source is not None:  # a resumed run overwrites these with its checkpoint's weights
             state = source.state_dict()
             if source.config != self.model.config:  # a larger latent (checked by _init_source)
@@ -193,8 +194,8 @@ class Trainer:
         self.amp = cfg.amp == "bf16" or (cfg.amp == "auto" and cuda)
         if cfg.compile == "on" or (cfg.compile == "auto" and cuda):
             # Module.compile() keeps the parameter names, so checkpoints stay loadable everywhere.
-            self.model.encoder.compile()
-            self.model.decoder.compile()
+            for child in self.model.children():  # encoder and decoder (VENI: encoder and field)
+                child.compile()
         self.ddp = self.model
         if self.dist.distributed:
             from torch.nn.parallel import DistributedDataParallel
@@ -363,7 +364,8 @@ class Trainer:
             n = rad.shape[0]
             vals = {k: float(terms[k]) * n for k in LOSS_TERMS}
             vals["psnr_ldr"] = float(psnr(to_ldr(rad_hat, rad), to_ldr(rad)).clamp(max=100).sum())
-            vals["abs_rel"] = float(abs_rel(dep_hat, dep).sum())
+            if getattr(self.model, "has_depth", True):  # VENI's reconstructions carry the input's depth
+                vals["abs_rel"] = float(abs_rel(dep_hat, dep).sum())
             for k, v in vals.items():
                 sums[k] = sums.get(k, 0.0) + v
             count += n
@@ -402,6 +404,8 @@ class Trainer:
         recon = self.model.normalization.denormalize(x_hat.float())
         z = torch.randn(count, self.model.config.latent_dim, generator=torch.Generator().manual_seed(self.cfg.seed))
         samples = self.model.decode(z.to(self.device))
+        if samples[1] is None:  # VENI: radiance only; its depth column shows a constant
+            samples = (samples[0], torch.ones_like(samples[0][:, :1]))
         self.model.train()
         panel = training_panel((rad, dep), recon, samples)
         path = self.run_dir / "images" / f"{ck.checkpoint_name(self.step)}.png"
