@@ -13,7 +13,13 @@ per measurement so that OpenMP's settings take effect:
 each, like any other job). Times are the median of ``--repeats`` runs, in seconds for the fit
 alone (process start and model loading excluded).
 
-Run: .venv/bin/python benchmarks/bench_threads.py [--steps 100] [--repeats 3] [--busy 1]
+"Load arriving later" runs ``--phases`` fits in one process that chose its threads on an idle
+machine; the busy processes start after the first phase. ``start only`` keeps the choice made at the
+start; ``re-checked`` measures the load again before each phase
+(:func:`roomlight.render.variant.recheck_threads`, as the long commands do between their cases and
+validations). Its times are the median over the phases after the load arrived.
+
+Run: .venv/bin/python benchmarks/bench_threads.py [--steps 100] [--repeats 3] [--busy 1] [--phases 5]
 """
 
 from __future__ import annotations
@@ -56,6 +62,67 @@ print(json.dumps({"seconds": time.perf_counter() - t, "threads": torch.get_num_t
 """
 
 
+PHASES_CHILD = r"""
+import json, os, sys, time
+from roomlight.cli.threads import apply_thread_policy, measured_threads, prepare_environment
+prepare_environment()
+os.environ["ROOMLIGHT_THREADS"] = str(measured_threads())
+if os.environ.get("BENCH_POLICY") == "recheck":
+    os.environ["ROOMLIGHT_THREADS_AUTO"] = "1"
+apply_thread_policy()
+import torch
+from roomlight.demo import bundled_prior_path
+from roomlight.examples import example_room
+from roomlight.fit import LatentFitConfig, fit_latent
+from roomlight.model import PanoVAE
+from roomlight.render.variant import recheck_threads
+
+model = PanoVAE.from_pretrained(bundled_prior_path())
+h, w = model.config.resolution
+rad, dep = example_room(h)
+rad = rad.permute(2, 0, 1)[None].float()
+dep = dep[None, None].float()
+fit_latent(model, rad, dep, LatentFitConfig(steps=2))  # warm-up
+for phase in range(int(sys.argv[2])):
+    if phase:
+        time.sleep(0.5)  # the parent starts the busy processes after the first phase
+    recheck_threads()  # does nothing unless the policy is 'recheck'
+    t = time.perf_counter()
+    fit_latent(model, rad, dep, LatentFitConfig(steps=int(sys.argv[1])))
+    print(json.dumps({"phase": phase, "seconds": time.perf_counter() - t, "threads": torch.get_num_threads()}),
+          flush=True)
+"""
+
+
+def run_phases(policy: str, steps: int, phases: int, busy: int) -> dict:
+    """One process of ``phases`` fits; ``busy`` spinning processes start once the first is done."""
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OMP_WAIT_POLICY", "OMP_NUM_THREADS", "KMP_BLOCKTIME", "ROOMLIGHT_THREADS",
+                        "ROOMLIGHT_THREADS_AUTO")}
+    env["BENCH_POLICY"] = policy
+    src = Path(__file__).resolve().parents[1] / "src"
+    env["PYTHONPATH"] = os.pathsep.join([str(src), env.get("PYTHONPATH", "")])
+    proc = subprocess.Popen([sys.executable, "-c", PHASES_CHILD, str(steps), str(phases)], env=env,
+                            stdout=subprocess.PIPE, text=True)
+    stop = multiprocessing.Event()
+    spinners, rows = [], []
+    try:
+        for line in proc.stdout:
+            rows.append(json.loads(line))
+            if len(rows) == 1:
+                spinners = [multiprocessing.Process(target=_spin, args=(stop,), daemon=True) for _ in range(busy)]
+                for p in spinners:
+                    p.start()
+        proc.wait()
+    finally:
+        stop.set()
+        for p in spinners:
+            p.join()
+    later = rows[1:]
+    return {"first": rows[0]["seconds"], "seconds": statistics.median(r["seconds"] for r in later),
+            "threads": f"{rows[0]['threads']} -> {later[-1]['threads']}"}
+
+
 def _spin(stop) -> None:
     x = 0
     while not stop.is_set():
@@ -84,6 +151,7 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=100, help="latent-fit steps per measurement")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--busy", type=int, default=1, help="busy processes for the 'under load' row")
+    ap.add_argument("--phases", type=int, default=5, help="fits per process in the 'load arriving later' rows")
     args = ap.parse_args()
     load_before = os.getloadavg()[0]
 
@@ -114,6 +182,21 @@ def main() -> None:
         label = load if load == "as found" else f"{load} (+{args.busy} busy process{'es' if args.busy > 1 else ''})"
         cells = " | ".join(f"{c['seconds']:.2f} s ({c['threads']} thr., {c['wait'].lower()})" for c in cols)
         print(f"| {label} | {cells} | {cols[0]['seconds'] / cols[-1]['seconds']:.1f}× |")
+
+    late = {policy: [run_phases(policy, args.steps, args.phases, args.busy) for _ in range(args.repeats)]
+            for policy in ("start", "recheck")}
+    print(f"\nLoad arriving later: {args.phases} fits of {args.steps} steps in one process, +{args.busy} busy "
+          f"process(es) from the second on; medians of {args.repeats} processes\n")
+    print("| threads chosen | first fit (idle) | fits after the load arrived | threads |")
+    print("|---|---:|---:|---|")
+    for policy, label in (("start", "at the start only"), ("recheck", "re-checked before each fit")):
+        runs = late[policy]
+        first = statistics.median(r["first"] for r in runs)
+        later = statistics.median(r["seconds"] for r in runs)
+        print(f"| {label} | {first:.2f} s | {later:.2f} s | {runs[-1]['threads']} |")
+    ratio = statistics.median(r["seconds"] for r in late["start"]) / statistics.median(
+        r["seconds"] for r in late["recheck"])
+    print(f"\nre-checking: {ratio:.1f}x faster once the load arrived")
 
 
 if __name__ == "__main__":

@@ -88,13 +88,76 @@ def test_threads_option_and_environment_variable_set_torch_threads():
 
 
 def test_default_threads_are_the_free_cpus_this_process_may_use(monkeypatch):
-    from roomlight.cli import threads
+    from roomlight import cpu
 
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2, 3}, raising=False)
-    monkeypatch.setattr(threads, "busy_cpus", lambda interval=0.05: 1.4)
-    assert threads.measured_threads() == 3
-    monkeypatch.setattr(threads, "busy_cpus", lambda interval=0.05: 7.0)
-    assert threads.measured_threads() == 1
+    monkeypatch.setattr(cpu, "busy_cpus", lambda interval=0.05, exclude_self=False: 1.4)
+    assert cpu.measured_threads() == 3
+    monkeypatch.setattr(cpu, "busy_cpus", lambda interval=0.05, exclude_self=False: 7.0)
+    assert cpu.measured_threads() == 1
+
+
+def test_own_cpu_time_matches_getrusage_and_a_busy_process_is_seen():
+    """This process's ticks (what the re-check leaves out) against the kernel's other account of them,
+    getrusage; and a process spinning next to us counts as busy whatever this one does."""
+    import multiprocessing
+    import resource
+    import time
+
+    from roomlight import cpu
+
+    hz = os.sysconf("SC_CLK_TCK")
+    r0, t0 = resource.getrusage(resource.RUSAGE_SELF), cpu._own_ticks()
+    end = time.perf_counter() + 0.4
+    while time.perf_counter() < end:  # 0.4 s of CPU in this process
+        pass
+    r1, t1 = resource.getrusage(resource.RUSAGE_SELF), cpu._own_ticks()
+    used = (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime)
+    assert used > 0.25 and abs((t1 - t0) / hz - used) <= 2.5 / hz + 0.02
+    ctx = multiprocessing.get_context("fork")
+    spinner = ctx.Process(target=_spin_for, args=(3.0,), daemon=True)
+    spinner.start()
+    try:
+        time.sleep(0.3)
+        assert cpu.busy_cpus(interval=0.5, exclude_self=True) >= 0.6
+    finally:
+        spinner.terminate()
+        spinner.join()
+
+
+def _spin_for(seconds: float) -> None:
+    import time
+
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        pass
+
+
+def test_the_recheck_follows_the_load_only_for_a_count_roomlight_chose(monkeypatch):
+    import torch
+
+    from roomlight import cpu
+    from roomlight.render import variant
+
+    before = torch.get_num_threads()
+    monkeypatch.setenv("ROOMLIGHT_THREADS", "2")
+    monkeypatch.delenv("ROOMLIGHT_DETERMINISTIC", raising=False)
+    monkeypatch.setattr(cpu, "measured_threads", lambda exclude_self=False: 1)
+    monkeypatch.delenv("ROOMLIGHT_THREADS_AUTO", raising=False)
+    assert variant.recheck_threads() is None                # given by the user (or --threads): kept
+    monkeypatch.setenv("ROOMLIGHT_THREADS_AUTO", "1")
+    monkeypatch.setenv("ROOMLIGHT_DETERMINISTIC", "1")
+    assert variant.recheck_threads() is None                # --deterministic: kept
+    monkeypatch.delenv("ROOMLIGHT_DETERMINISTIC")
+    notes = []
+    try:
+        assert variant.recheck_threads(note=notes.append) == 1
+        assert torch.get_num_threads() == 1 and os.environ["ROOMLIGHT_THREADS"] == "1"
+        assert len(notes) == 1 and "1 thread(s) for torch" in notes[0]
+        assert variant.recheck_threads() is None             # unchanged load: nothing to do
+    finally:
+        torch.set_num_threads(before)
+        monkeypatch.setenv("OMP_NUM_THREADS", str(before))
 
 
 # ----------------------------------------------------------------------------- options

@@ -310,7 +310,10 @@ def check_run_file(out: Path, settings: dict, keys) -> None:
 def _attempt(c: Case, out: Path, fit, fit_config, model, eval_spp: int, max_depth: int,
              progress: bool) -> tuple[str, str | None]:
     """Run one case; a failure is written to its ``error.json`` and returned as text."""
+    from roomlight.render.variant import recheck_threads
+
     name = f"{c.scene_id}/{c.method}"
+    recheck_threads()  # between cases the load may have changed (only for a thread count roomlight chose)
     try:
         run_case(c, out, fit, fit_config, model, eval_spp, max_depth, progress)
         return name, None

@@ -23,45 +23,13 @@ from __future__ import annotations
 
 import os
 import sys
-import time
 
 from roomlight.errors import RoomlightError
 
 __all__ = ["ENV_THREADS", "available_cpus", "prepare_environment", "thread_count", "apply_thread_policy",
            "default_threads", "busy_cpus", "measured_threads"]
 
-ENV_THREADS = "ROOMLIGHT_THREADS"
-
-
-def available_cpus() -> int:
-    """CPUs this process may run on (its affinity mask; the machine's count where that is unknown)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except (AttributeError, OSError):  # not on Linux
-        return max(1, os.cpu_count() or 1)
-
-
-def busy_cpus(interval: float = 0.05) -> float:
-    """CPUs kept busy by all processes over ``interval`` seconds (from ``/proc/stat``; 0 where unreadable)."""
-    def snapshot():
-        with open("/proc/stat") as f:
-            values = [int(v) for v in f.readline().split()[1:9]]
-        return sum(values), values[3] + values[4]  # total, idle + iowait
-
-    try:
-        total0, idle0 = snapshot()
-        time.sleep(interval)
-        total1, idle1 = snapshot()
-    except (OSError, ValueError, IndexError):
-        return 0.0
-    if total1 <= total0:
-        return 0.0
-    return max(0.0, 1.0 - (idle1 - idle0) / (total1 - total0)) * (os.cpu_count() or 1)
-
-
-def measured_threads() -> int:
-    """:func:`available_cpus` less the CPUs other processes keep busy right now, at least 1."""
-    return max(1, available_cpus() - int(busy_cpus() + 0.5))
+from roomlight.cpu import ENV_THREADS, ENV_THREADS_AUTO, available_cpus, busy_cpus, measured_threads  # noqa: F401
 
 
 #: Other processes keeping at least this many CPUs busy make OpenMP's threads sleep when idle.
@@ -115,6 +83,9 @@ def apply_thread_policy(option: int | None = None) -> int | None:
 
 
 def default_threads() -> None:
-    """``$ROOMLIGHT_THREADS`` defaults to :func:`measured_threads` (the program's start)."""
+    """``$ROOMLIGHT_THREADS`` defaults to :func:`measured_threads` (the program's start); it is then
+    marked as measured (``$ROOMLIGHT_THREADS_AUTO=1``), so that long commands measure again between
+    their phases (:func:`roomlight.render.variant.recheck_threads`). A count the user gives stays fixed."""
     if not os.environ.get(ENV_THREADS, "").strip():
         os.environ[ENV_THREADS] = str(measured_threads())
+        os.environ[ENV_THREADS_AUTO] = "1"

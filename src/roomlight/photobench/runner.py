@@ -208,8 +208,11 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
 
         bar = progress_bar(total=len(todo), desc="run-photos", unit="case")
     try:
+        from roomlight.render.variant import recheck_threads
+
         for c in todo:
             name = f"{c.photo}/{c.method}"
+            recheck_threads(note=bar.write if bar is not None else None)  # the load may have changed
             try:
                 run_photo_case(c, out, preset, model, eval_spp, fit, progress=False, overrides=overrides)
                 summary.done.append(name)

@@ -11,10 +11,11 @@ variant is activated and an actionable :class:`BackendError` is raised instead.
 from __future__ import annotations
 
 import os
+import sys
 
 from roomlight.errors import BackendError
 
-__all__ = ["MIN_LLVM", "ENV_DETERMINISTIC", "ENV_PARALLEL_BACKWARD", "serial_backward", "worker_count", "deterministic", "llvm_status", "cuda_available", "choose_variant",
+__all__ = ["MIN_LLVM", "ENV_DETERMINISTIC", "ENV_PARALLEL_BACKWARD", "serial_backward", "worker_count", "recheck_threads", "deterministic", "llvm_status", "cuda_available", "choose_variant",
            "ensure_variant", "mitsuba", "torch_device"]
 
 MIN_LLVM = (16, 0, 0)
@@ -128,6 +129,37 @@ def worker_count() -> int:
 
     ensure_variant()
     return _workers if _workers is not None else dr.thread_count()
+
+
+def recheck_threads(note=None) -> int | None:
+    """Measure the load again and follow it: between the long phases of a command (benchmark cases,
+    training validations) the other processes may have changed. Only when roomlight chose the thread
+    count itself (the ``roomlight`` program marks it, :data:`roomlight.cpu.ENV_THREADS_AUTO`); a count
+    given with ``--threads`` / ``$ROOMLIGHT_THREADS``, or ``--deterministic``, stays as it is.
+
+    Sets torch's threads and Dr.Jit's workers (at least two) to the CPUs this process may use less
+    those other processes keep busy now (this process's own threads excluded); returns the new count
+    when it changed, else None. ``note`` receives one line when it changes.
+    """
+    from roomlight.cpu import ENV_THREADS, ENV_THREADS_AUTO, measured_threads
+
+    if os.environ.get(ENV_THREADS_AUTO) != "1" or deterministic():
+        return None
+    n = measured_threads(exclude_self=True)
+    if str(n) == os.environ.get(ENV_THREADS):
+        return None
+    os.environ[ENV_THREADS] = os.environ["OMP_NUM_THREADS"] = str(n)
+    if "torch" in sys.modules:
+        sys.modules["torch"].set_num_threads(n)
+    global _workers
+    if _active is not None and _active.startswith("llvm"):
+        import drjit as dr
+
+        dr.set_thread_count(max(2, n))
+        _workers = dr.thread_count()
+    if note is not None:
+        note(f"the load changed: now {n} thread(s) for torch and {max(2, n)} for Mitsuba")
+    return n
 
 
 def deterministic() -> bool:

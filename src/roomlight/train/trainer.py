@@ -340,7 +340,9 @@ class Trainer:
         without augmentation. Updates ``RUN/best`` when the total loss improves.
         """
         from roomlight.eval.metrics import abs_rel, psnr, to_ldr
+        from roomlight.render.variant import recheck_threads
 
+        recheck_threads(note=self.note)  # a long run: other jobs may have started or ended since the last check
         ds = self.val_set if self.val_set is not None else self.train_set
         tag = "val" if self.val_set is not None else "val_on_train"
         bs = min(self.cfg.batch_size, len(ds))
