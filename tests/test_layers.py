@@ -34,7 +34,7 @@ LAYERS = [
     ["emitter"],
     ["io"],
     ["geometry"],
-    ["color", "config", "progress", "cluster", "stats"],
+    ["color", "config", "progress", "cluster", "stats", "cpu"],
     ["errors"],
 ]
 
