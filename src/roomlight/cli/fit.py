@@ -14,12 +14,14 @@ _FAST = FIT_PRESETS["fast"]
 @click.command("fit")
 @click.argument("scene", type=click.Path())
 @click.option("--method", type=click.Choice(METHODS), default="prior", show_default=True,
-              help="prior: the 2.5D prior (paper); prior-envmap: the prior shown at infinity; "
-                   "direct-al / direct-sphere / direct-envmap: per-pixel maps with a smoothness prior.")
+              help="prior: the 2.5D prior (paper); prior-envmap: the prior shown at infinity; veni / veni-d: "
+                   "the VENI prior at infinity / VENI+D as a 2.5D light (their bundled models, or --model, or "
+                   "--set veni_model=PATH / veni_d_model=PATH); direct-al / direct-sphere / direct-envmap: "
+                   "per-pixel maps with a smoothness prior.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
 @click.option("--model", type=click.Path(), default=None,
-              help="Trained prior for the prior methods: a model folder, a training run (uses its best/) "
-                   "or the authors' run folder [default: the prior bundled with roomlight].")
+              help="Trained prior for the prior methods: a model folder, a training run (uses its best/), "
+                   "the authors' run folder or a bundled model's name [default: the prior bundled with roomlight].")
 @click.option("--preset", type=click.Choice(list(FIT_PRESETS)), default="paper", show_default=True,
               help=f"paper: the paper's settings ({FitConfig.iterations} it, {FitConfig.spp} spp); fast: a CPU-friendly "
                    f"setting ({_FAST.iterations} it, {_FAST.spp} spp).")
