@@ -34,6 +34,22 @@ import sys
 import time
 from pathlib import Path
 
+#: The workload's set-up, shared by both child scripts: the bundled prior, the example room, a warm-up fit.
+LOAD_AND_WARM_UP = r"""
+import torch
+from roomlight.demo import bundled_prior_path
+from roomlight.examples import example_room
+from roomlight.fit import LatentFitConfig, fit_latent
+from roomlight.model import PanoVAE
+
+model = PanoVAE.from_pretrained(bundled_prior_path())
+h, w = model.config.resolution
+rad, dep = example_room(h)
+rad = rad.permute(2, 0, 1)[None].float()
+dep = dep[None, None].float()
+fit_latent(model, rad, dep, LatentFitConfig(steps=2))  # warm-up
+"""
+
 CHILD = r"""
 import json, os, sys, time
 if os.environ.get("BENCH_POLICY") == "passive":
@@ -43,24 +59,12 @@ if os.environ.get("BENCH_POLICY") == "after":
     prepare_environment()
     os.environ["ROOMLIGHT_THREADS"] = str(measured_threads())
     apply_thread_policy()
-import torch
-from roomlight.demo import bundled_prior_path
-from roomlight.examples import example_room
-from roomlight.fit import LatentFitConfig, fit_latent
-from roomlight.model import PanoVAE
-
-model = PanoVAE.from_pretrained(bundled_prior_path())
-h, w = model.config.resolution
-rad, dep = example_room(h)
-rad = rad.permute(2, 0, 1)[None].float()
-dep = dep[None, None].float()
-fit_latent(model, rad, dep, LatentFitConfig(steps=2))  # warm-up
+""" + LOAD_AND_WARM_UP + r"""
 t = time.perf_counter()
 fit_latent(model, rad, dep, LatentFitConfig(steps=int(sys.argv[1])))
 print(json.dumps({"seconds": time.perf_counter() - t, "threads": torch.get_num_threads(),
                   "wait": os.environ.get("OMP_WAIT_POLICY", "default")}))
 """
-
 
 PHASES_CHILD = r"""
 import json, os, sys, time
@@ -70,19 +74,8 @@ os.environ["ROOMLIGHT_THREADS"] = str(measured_threads())
 if os.environ.get("BENCH_POLICY") == "recheck":
     os.environ["ROOMLIGHT_THREADS_AUTO"] = "1"
 apply_thread_policy()
-import torch
-from roomlight.demo import bundled_prior_path
-from roomlight.examples import example_room
-from roomlight.fit import LatentFitConfig, fit_latent
-from roomlight.model import PanoVAE
+""" + LOAD_AND_WARM_UP + r"""
 from roomlight.render.variant import recheck_threads
-
-model = PanoVAE.from_pretrained(bundled_prior_path())
-h, w = model.config.resolution
-rad, dep = example_room(h)
-rad = rad.permute(2, 0, 1)[None].float()
-dep = dep[None, None].float()
-fit_latent(model, rad, dep, LatentFitConfig(steps=2))  # warm-up
 for phase in range(int(sys.argv[2])):
     if phase:
         time.sleep(0.5)  # the parent starts the busy processes after the first phase

@@ -52,9 +52,10 @@ def test_vn_relu_is_the_projection_of_its_equation():
     torch.manual_seed(2)
     layer = VNReLU(3).double()
     x = torch.randn(5, 3, 4, dtype=torch.float64)
-    y = layer(x)
-    q = torch.einsum("oi,nid->nod", layer.q.weight, x)
-    k = torch.einsum("oi,nid->nod", layer.k.weight, x)
+    with torch.no_grad():
+        y = layer(x)
+        q = torch.einsum("oi,nid->nod", layer.q.weight, x)
+        k = torch.einsum("oi,nid->nod", layer.k.weight, x)
     for n in range(5):
         for c in range(3):
             kh = k[n, c] / math.sqrt(float(k[n, c].square().sum()) + 1e-6)

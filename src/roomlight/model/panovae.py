@@ -15,7 +15,6 @@ Checkpoints: :meth:`PanoVAE.save_pretrained` writes ``model.safetensors`` + ``co
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import torch
@@ -26,19 +25,16 @@ from roomlight.model.config import ModelConfig
 from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.networks import Decoder, Encoder
 from roomlight.model.normalization import Normalization
-from roomlight.model.weights import (CONFIG_KEYS, file_sha256, load_state_dict_checked, load_weights_file,
-                                    read_config_json)
+from roomlight.model.saved import CONFIG_NAME, WEIGHTS_NAME, SavedPrior
 
 __all__ = ["Encoder", "Decoder", "PanoVAE", "WEIGHTS_NAME", "CONFIG_NAME", "FORMAT_NAME"]
 
-WEIGHTS_NAME = "model.safetensors"
-CONFIG_NAME = "config.json"
 #: ``format`` field of our config.json, so that other JSON files are not mistaken for one.
 FORMAT_NAME = "roomlight.panovae"
 FORMAT_VERSION = 1
 
 
-class PanoVAE(nn.Module):
+class PanoVAE(SavedPrior, nn.Module):
     """The prior. Holds its :class:`ModelConfig`, :class:`Normalization` and metadata.
 
     Args:
@@ -49,6 +45,8 @@ class PanoVAE(nn.Module):
             ``"metres"`` for roomlight-trained models and ``"scale-free"`` for the authors'
             checkpoint (their depth has unit geometric-mean radius).
     """
+
+    FORMAT, FORMAT_VERSION, CONFIG_CLASS = FORMAT_NAME, FORMAT_VERSION, ModelConfig
 
     def __init__(self, config: ModelConfig | None = None, normalization: Normalization | None = None,
                  metadata: dict | None = None):
@@ -150,37 +148,6 @@ class PanoVAE(nn.Module):
         return self._require_normalization().denormalize(self.decode_normalized(z))
 
     # ------------------------------------------------------------------ checkpoints
-    def save_pretrained(self, directory: str | Path, training_config=None) -> Path:
-        """Write ``model.safetensors`` + ``config.json`` into ``directory`` (created if needed).
-
-        ``training_config`` (a dataclass or dict) is stored verbatim for provenance. Returns the
-        directory. No pickle is involved, so the result is safe to share.
-        """
-        import dataclasses
-
-        from safetensors.torch import save_file
-
-        from roomlight import __version__
-
-        directory = Path(directory)
-        directory.mkdir(parents=True, exist_ok=True)
-        if dataclasses.is_dataclass(training_config) and not isinstance(training_config, type):
-            training_config = dataclasses.asdict(training_config)
-        tensors = {k: v.detach().to("cpu").contiguous() for k, v in self.state_dict().items()}
-        save_file(tensors, str(directory / WEIGHTS_NAME), metadata={"format": FORMAT_NAME})
-        meta = {
-            "format": FORMAT_NAME,
-            "format_version": FORMAT_VERSION,
-            "roomlight_version": __version__,
-            "model": self.config.to_dict(),
-            "normalization": None if self.normalization is None else self.normalization.to_dict(),
-            "metadata": self.metadata,
-            "training": training_config,
-            "weights_sha256": file_sha256(directory / WEIGHTS_NAME),  # verified on load
-        }
-        (directory / CONFIG_NAME).write_text(json.dumps(meta, indent=2, default=str) + "\n")
-        return directory
-
     @classmethod
     def from_pretrained(cls, path: str | Path, device: str | torch.device = "cpu") -> "PanoVAE":
         """Load a model saved by :meth:`save_pretrained`, or the authors' run folder.
@@ -196,7 +163,7 @@ class PanoVAE(nn.Module):
             raise InputFileError(path, "no such file or directory", "pass a checkpoint directory")
         directory = path if path.is_dir() else path.parent
         if (directory / CONFIG_NAME).exists() and (directory / WEIGHTS_NAME).exists():
-            model = cls._load_roomlight(directory)
+            model = cls._load_saved(directory)
             from roomlight.model.view_encoder import load_view_encoder_beside
 
             # the weights' checksum was verified while loading them: no second pass over the file
@@ -212,32 +179,3 @@ class PanoVAE(nn.Module):
                 "point at the folder written by save_pretrained or `roomlight convert`",
             )
         return model.to(device).eval()
-
-    @classmethod
-    def _load_roomlight(cls, directory: Path) -> "PanoVAE":
-        from roomlight.config import check_keys
-
-        cfg_path = directory / CONFIG_NAME
-        meta = read_config_json(cfg_path, FORMAT_NAME, FORMAT_VERSION)
-        try:
-            check_keys(meta, CONFIG_KEYS, "config")
-            config = ModelConfig.from_dict(meta.get("model"), where="config.model")
-            norm = meta.get("normalization")
-            norm = None if norm is None else Normalization.from_dict(norm)
-        except RoomlightError as e:
-            raise InputFileError(cfg_path, str(e)) from None
-        except (TypeError, ValueError, KeyError, AttributeError) as e:
-            raise InputFileError(cfg_path, f"config.normalization: not valid ({e})") from None
-        sha = meta.get("weights_sha256")
-        if sha is not None and not isinstance(sha, str):
-            raise InputFileError(cfg_path, f"config.weights_sha256: expected str, got {sha!r}")
-        metadata = dict(meta.get("metadata") or {})
-        if meta.get("training") is not None:
-            metadata.setdefault("training", meta["training"])
-        metadata.setdefault("saved_with_roomlight", meta.get("roomlight_version"))
-        model = cls(config, norm, metadata)
-        # Checkpoints written before the checksum was recorded have none: they load unverified.
-        state = load_weights_file(directory / WEIGHTS_NAME, sha256=sha)
-        model._weights_sha256 = sha  # verified above (None for checkpoints saved before checksums)
-        load_state_dict_checked(model, state, str(directory / WEIGHTS_NAME))
-        return model

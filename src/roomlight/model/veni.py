@@ -40,8 +40,7 @@ from roomlight.geometry.equirect import pixel_directions
 from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.equivariant import SO2Linear, VNBlock
 from roomlight.model.normalization import Normalization
-from roomlight.model.weights import (CONFIG_KEYS, file_sha256, load_state_dict_checked, load_weights_file,
-                                    read_config_json)
+from roomlight.model.saved import CONFIG_NAME, WEIGHTS_NAME, SavedPrior
 
 __all__ = ["VeniConfig", "VENI_PRESETS", "VeniEncoder", "VeniField", "VeniVAE", "rotate_latent",
            "VENI_FORMAT"]
@@ -223,7 +222,7 @@ class VeniField(nn.Module):
         return self.out(self.out_norm(h))
 
 
-class VeniVAE(nn.Module):
+class VeniVAE(SavedPrior, nn.Module):
     """VENI (radiance) or VENI+D (radiance + depth): the same interface as
     :class:`~roomlight.model.panovae.PanoVAE` where the fitting and evaluation code use it.
 
@@ -234,7 +233,7 @@ class VeniVAE(nn.Module):
         metadata: free-form JSON facts saved with the checkpoint.
     """
 
-    family = "veni"
+    FORMAT, FORMAT_VERSION, CONFIG_CLASS = VENI_FORMAT, VENI_FORMAT_VERSION, VeniConfig
 
     def __init__(self, config: VeniConfig | None = None, normalization: Normalization | None = None,
                  metadata: dict | None = None):
@@ -315,57 +314,16 @@ class VeniVAE(nn.Module):
         return radiance, depth if self.has_depth else None
 
     # ------------------------------------------------------------------ checkpoints
-    def save_pretrained(self, directory: str | Path, training_config=None) -> Path:
-        """``model.safetensors`` + ``config.json`` (format ``roomlight.veni``) into ``directory``."""
-        import dataclasses
-
-        from safetensors.torch import save_file
-
-        from roomlight import __version__
-        from roomlight.model.panovae import CONFIG_NAME, WEIGHTS_NAME
-
-        directory = Path(directory)
-        directory.mkdir(parents=True, exist_ok=True)
-        if dataclasses.is_dataclass(training_config) and not isinstance(training_config, type):
-            training_config = dataclasses.asdict(training_config)
-        tensors = {k: v.detach().to("cpu").contiguous() for k, v in self.state_dict().items()}
-        save_file(tensors, str(directory / WEIGHTS_NAME), metadata={"format": VENI_FORMAT})
-        meta = {"format": VENI_FORMAT, "format_version": VENI_FORMAT_VERSION, "roomlight_version": __version__,
-                "model": self.config.to_dict(),
-                "normalization": None if self.normalization is None else self.normalization.to_dict(),
-                "metadata": self.metadata, "training": training_config,
-                "weights_sha256": file_sha256(directory / WEIGHTS_NAME)}
-        (directory / CONFIG_NAME).write_text(json.dumps(meta, indent=2, default=str) + "\n")
-        return directory
+    # save_pretrained comes from SavedPrior (format roomlight.veni)
 
     @classmethod
     def from_pretrained(cls, path: str | Path, device: str | torch.device = "cpu") -> "VeniVAE":
         """Load a folder written by :meth:`save_pretrained` (or a file inside it); eval mode."""
-        from roomlight.config import check_keys
-        from roomlight.model.panovae import CONFIG_NAME, WEIGHTS_NAME
-
         path = Path(path)
         directory = path if path.is_dir() else path.parent
-        cfg_path = directory / CONFIG_NAME
-        if not cfg_path.is_file() or not (directory / WEIGHTS_NAME).is_file():
+        if not (directory / CONFIG_NAME).is_file() or not (directory / WEIGHTS_NAME).is_file():
             raise InputFileError(directory, f"not a VENI checkpoint: expected {CONFIG_NAME} + {WEIGHTS_NAME}")
-        meta = read_config_json(cfg_path, VENI_FORMAT, VENI_FORMAT_VERSION)
-        try:
-            check_keys(meta, CONFIG_KEYS, "config")
-            config = VeniConfig.from_dict(meta.get("model"), where="config.model")
-            norm = meta.get("normalization")
-            norm = None if norm is None else Normalization.from_dict(norm)
-        except RoomlightError as e:
-            raise InputFileError(cfg_path, str(e)) from None
-        metadata = dict(meta.get("metadata") or {})
-        if meta.get("training") is not None:
-            metadata.setdefault("training", meta["training"])
-        model = cls(config, norm, metadata)
-        sha = meta.get("weights_sha256")
-        state = load_weights_file(directory / WEIGHTS_NAME, sha256=sha)
-        model._weights_sha256 = sha
-        load_state_dict_checked(model, state, str(directory / WEIGHTS_NAME))
-        return model.to(device).eval()
+        return cls._load_saved(directory).to(device).eval()
 
 
 def checkpoint_format(directory: str | Path) -> str | None:
