@@ -193,7 +193,7 @@ def test_fitting_window_renders_the_same_pixels_as_the_full_frame(tiny):
 def test_direct_al_from_truth_stays_and_from_constant_improves(tiny, tmp_path):
     scene, rad, depth = tiny
     # The paper's learning rate; enough samples that the fixed-seed check measures the parameters.
-    cfg = FitConfig(iterations=40, spp=32, eval_every=10, eval_spp=128, lambda_rep=0.0)
+    cfg = FitConfig(iterations=30, spp=32, eval_every=10, eval_spp=64, lambda_rep=0.0)
     truth = DirectLight("mesh", tuple(rad.shape[:2]), init_radiance=rad, init_depth=depth,
                         smooth_radiance=cfg.smooth_radiance, smooth_depth=cfg.smooth_depth)
     r_true = fit_scene(scene, "direct-al", cfg, light=truth, progress=False)
@@ -245,7 +245,7 @@ def test_prior_fit_moves_the_latent_and_beats_exposure_alone(side_lit):
 
     scene, _, _ = side_lit
     model = PanoVAE.from_pretrained(bundled_prior_path())
-    cfg = FitConfig(iterations=60, spp=8, eval_every=10, eval_spp=64, lambda_rep=0.0)
+    cfg = FitConfig(iterations=40, spp=8, eval_every=10, eval_spp=32, lambda_rep=0.0)
     both = fit_scene(scene, "prior", cfg, model=model, progress=False)
     exposure_only = make_light("prior", scene, cfg, model=model)
     exposure_only.z.requires_grad_(False)
