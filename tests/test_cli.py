@@ -117,6 +117,7 @@ def test_negative_radiance_needs_explicit_fix(tmp_path):
     assert r.exit_code == 0 and "1 pixel" in r.output
 
 
+@pytest.mark.slow
 @pytest.mark.mitsuba
 def test_demo_runs(tmp_path):
     r = run("demo", "--out", tmp_path / "demo", "--height", "16", "--res", "32", "--iterations", "4",

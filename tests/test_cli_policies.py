@@ -56,6 +56,7 @@ def negative_pano(path: Path, count: int = 3) -> Path:
 
 
 # ----------------------------------------------------------------------------- threads
+@pytest.mark.slow
 def test_the_wait_policy_is_set_before_torch_loads_and_the_user_setting_wins():
     probe = ("import os, sys\n"
              "seen = {}\n"
@@ -73,6 +74,7 @@ def test_the_wait_policy_is_set_before_torch_loads_and_the_user_setting_wins():
     assert python(probe, OMP_WAIT_POLICY="ACTIVE").split() == ["ACTIVE", "ACTIVE"]
 
 
+@pytest.mark.slow
 def test_threads_option_and_environment_variable_set_torch_threads():
     code = "import sys; from roomlight.cli.main import main; sys.argv = ['roomlight'] + sys.argv[1:]; main()"
     full = {**os.environ, "PYTHONPATH": os.pathsep.join([SRC, os.environ.get("PYTHONPATH", "")])}

@@ -26,6 +26,7 @@ def _pixels(path):
     return {k: np.asarray(v) for k, v in read_exr(path).items()}
 
 
+@pytest.mark.slow
 def test_synth_on_a_cluster_equals_a_serial_run(cluster, tmp_path):
     from roomlight.synth.dataset import SynthConfig, generate_dataset
 

@@ -61,6 +61,7 @@ def test_rows_of_one_report_and_clear_errors():
         compare_reports(both, _report({"z.exr": {"encoder": {"psnr_ldr": 1.0}}}), "encoder")
 
 
+@pytest.mark.slow
 def test_compare_script_prints_and_writes_the_table(tmp_path):
     (tmp_path / "a.json").write_text(json.dumps(BASE))
     (tmp_path / "b.json").write_text(json.dumps(OTHER))

@@ -132,6 +132,7 @@ def test_procedural_layout_keeps_clear_of_surfaces(mi):
 # Whole runs with known answers
 # ---------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.mitsuba
 def test_furnace_room_every_emitter_gives_half_the_uniform_radiance(mi, tmp_path, one_torch_thread):
     """A closed room whose every surface emits L and reflects nothing: a gray (albedo 0.5) diffuse

@@ -204,6 +204,7 @@ def test_export_of_a_photo_fit_carries_the_camera_the_depth_mesh_and_the_backpla
 
 
 # ----------------------------------------------------------------------------- in the viewer
+@pytest.mark.slow
 @pytest.mark.mitsuba
 def test_viewer_of_a_photo_fit_shows_the_photograph_and_the_probe_shading_follows_the_surface(fitted_dir, tmp_path):
     """The photograph is the backdrop; a probe dropped on two surface points of the photograph is

@@ -109,6 +109,7 @@ def straight_run(toy, tmp_path_factory):
     return run
 
 
+@pytest.mark.slow
 def test_train_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_path):
     """Three interruptions at random points (most land inside an optimiser step), then the rest.
 
@@ -131,6 +132,7 @@ def test_train_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_
     assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
 
 
+@pytest.mark.slow
 def test_train_killed_before_its_first_checkpoint_starts_afresh(toy, straight_run, tmp_path):
     run = tmp_path / "run"
     code, _ = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], lambda: len(train_steps(run)) >= 2,
@@ -215,6 +217,7 @@ def synth_straight(tmp_path_factory):
     return exr_pixels(out, "**/*.exr")
 
 
+@pytest.mark.slow
 @pytest.mark.mitsuba
 @ALL_SIGNALS
 def test_synth_interrupted_then_rerun_renders_every_room_once_and_identically(synth_straight, tmp_path, sig):
@@ -241,6 +244,7 @@ def manifest_scenes(bench: Path) -> list:
     return [s["id"] for s in json.loads((bench / "manifest.json").read_text())["scenes"]]
 
 
+@pytest.mark.slow
 @pytest.mark.mitsuba
 @ALL_SIGNALS
 def test_bench_make_interrupted_then_rerun_builds_every_scene_once_and_identically(toy, bench_straight, tmp_path, sig):
@@ -274,6 +278,7 @@ def run_straight(bench_straight, tmp_path_factory):
     return results(out)
 
 
+@pytest.mark.slow
 @pytest.mark.mitsuba
 @ALL_SIGNALS
 def test_bench_run_interrupted_then_rerun_runs_every_case_once_and_identically(bench_straight, run_straight, tmp_path,

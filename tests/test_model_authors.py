@@ -178,6 +178,7 @@ def _write_authors_run(directory, payload):
     return directory
 
 
+@pytest.mark.slow
 def test_from_pretrained_authors_run_matches_reference_forward(tmp_path):
     sd = random_authors_state_dict()
     run = _write_authors_run(tmp_path / "run", {"epoch": 299, "step": 21000, "state_dict": sd})

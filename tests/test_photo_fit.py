@@ -98,6 +98,7 @@ def test_joint_fit_of_light_and_materials(photo, prior, tmp_path, one_torch_thre
     assert max(steps) <= cfg.latent_step_clip + 1e-6 and min(steps) > 0.5 * cfg.latent_step_clip, steps
 
 
+@pytest.mark.slow
 def test_interrupted_fit_resumes_where_it_stopped(photo, prior, tmp_path, monkeypatch, one_torch_thread):
     """A fit interrupted after its fourth iteration and run again continues from the saved state
     and ends where an uninterrupted fit ends."""

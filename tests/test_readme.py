@@ -60,6 +60,7 @@ def test_snippets_marked_as_needing_user_data_are_few():
     assert sum(needs for _, needs in blocks("python")) <= 1
 
 
+@pytest.mark.slow
 @pytest.mark.mitsuba
 def test_readme_tour_and_python_snippets_run_as_written(tmp_path):
     env = environment()

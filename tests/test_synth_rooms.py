@@ -19,6 +19,7 @@ def test_capture_point_is_at_eye_height_and_clear_of_surfaces():
         assert capture_clearance(room) >= 0.4, seed
 
 
+@pytest.mark.slow
 def test_generator_covers_large_spaces_and_light_colours():
     """Large spaces (halls, warehouses: >= 9 m sides, 3.5-8 m ceilings) make up ~15 % of rooms,
     and artificial light colours spread over 2700-6500 K rather than a few fixed values."""
@@ -45,6 +46,7 @@ def test_generator_covers_large_spaces_and_light_colours():
     assert min(ratios) < lo + 0.1 * (hi - lo) and max(ratios) > hi - 0.1 * (hi - lo)
 
 
+@pytest.mark.slow
 def test_every_generated_room_has_a_lit_source_and_a_clear_capture_point():
     """Structural checks over many seeds (no rendering): a daylight window or a switched-on
     ceiling light in the main room, capture >= 0.4 m from every surface, distinct rooms."""

@@ -60,6 +60,7 @@ def recon_psnr(model, ds) -> float:
     return float(psnr(to_ldr(pr, rad), to_ldr(rad)).mean())
 
 
+@pytest.mark.slow
 def test_tiny_model_overfits_four_panoramas(tmp_path):
     data = tmp_path / "four"
     write_toy_dataset(data, 4, 32)

@@ -90,6 +90,7 @@ def _ball(img, inset_x, which):
     return _region(img, cx - 12, TOP + IH // 2 - 12, 24, 24)
 
 
+@pytest.mark.slow
 def test_viewer_renders_the_light_and_the_probe_follows_it(red_blue, tmp_path):
     page = _view(red_blue, tmp_path)
     at_origin = screenshot(page, tmp_path / "origin.png", "probe=0,0,0&exposure=0", SIZE)
@@ -115,6 +116,7 @@ def test_viewer_renders_the_light_and_the_probe_follows_it(red_blue, tmp_path):
                                err_msg="the env map does not depend on where the probe is")
 
 
+@pytest.mark.slow
 def test_viewer_screenshot_of_the_example_room(tmp_path):
     rad, depth = example_room(64)
     bundle = tmp_path / "example"
