@@ -55,3 +55,34 @@ def test_the_same_fit_twice_is_bit_identical(tmp_path):
     assert np.array_equal(pa.radiance, pb.radiance) and np.array_equal(pa.depth, pb.depth)
     ra, rb = (json.loads((tmp_path / n / "result.json").read_text()) for n in "ab")
     assert ra["objective"] == rb["objective"] and ra["materials"] == rb["materials"]
+
+
+@pytest.mark.mitsuba
+@pytest.mark.slow
+def test_every_fitting_method_repeats_itself_bit_for_bit(tmp_path):
+    """Each method of ``roomlight fit`` twice on the same scene (in one process, default settings): the
+    same history, recovered maps and best iterate, number for number."""
+    import torch
+
+    from helpers_scene import make_tiny_scene
+    from roomlight.inverse import FitConfig, fit_scene
+    from roomlight.inverse.methods import METHODS
+    from roomlight.model import PanoVAE, get_preset
+    from roomlight.model.normalization import Normalization
+    from roomlight.model.veni import VENI_PRESETS, VeniVAE
+
+    scene, _, _ = make_tiny_scene(tmp_path / "scene")
+    norm = Normalization(mean=(0.3, 0.3, 0.3, 1.0), std=(0.5, 0.5, 0.5, 0.4))
+    torch.manual_seed(0)
+    prior = PanoVAE(get_preset("tiny"), norm)
+    for name in ("veni-tiny", "veni-d-tiny"):
+        VeniVAE(VENI_PRESETS[name], norm).save_pretrained(tmp_path / name)
+    cfg = FitConfig(iterations=4, spp=4, eval_every=2, direct_resolution=(8, 16),
+                    veni_model=str(tmp_path / "veni-tiny"), veni_d_model=str(tmp_path / "veni-d-tiny"))
+    for method in METHODS:
+        a, b = (fit_scene(scene, method, cfg, model=prior, progress=False) for _ in range(2))
+        strip = lambda h: [{k: v for k, v in r.items() if "second" not in k and k != "time"} for r in h]  # noqa: E731
+        assert strip(a.history) == strip(b.history), method
+        assert np.array_equal(a.radiance, b.radiance) and a.best_iteration == b.best_iteration, method
+        if a.depth is not None:
+            assert np.array_equal(a.depth, b.depth), method
