@@ -60,8 +60,8 @@ def method_model(method: str, config: FitConfig, model=None):
             return model
         return _load_named(config.veni_d_model if wants_depth else config.veni_model)
     if is_veni(model):
-        raise RoomlightError(f"method {method!r} fits the panoramic VAE; {model.config} is a VENI model "
-                             "(use --method veni or veni-d with it)")
+        raise RoomlightError(f"method {method!r} fits the panoramic VAE, and the model given is a VENI model "
+                             "(use it with --method veni or veni-d)")
     return model
 
 
