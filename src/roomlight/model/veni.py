@@ -202,21 +202,27 @@ class VeniField(nn.Module):
         pixel = torch.cat([dot, cross, dy.expand(b, p)[..., None], planar.expand(b, p)[..., None]], -1)
         return pixel, torch.cat([zy, torch.sqrt(zx.square() + zz.square() + 1e-6)], -1)
 
-    def first_layer(self, z: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:
-        """(B, P, width) pre-activation of the first layer, computed per image then per pixel."""
-        zx, zy, zz = z.unflatten(-1, (-1, 3)).unbind(-1)                                   # (B, N)
+    @staticmethod
+    def image_invariants(z: torch.Tensor) -> torch.Tensor:
+        """(B, 2N) the per-image inputs [Z_iy, |Z_i⊥|]."""
+        zx, zy, zz = z.unflatten(-1, (-1, 3)).unbind(-1)
+        return torch.cat([zy, torch.sqrt(zx.square() + zz.square() + 1e-6)], -1)
+
+    def first_layer(self, z: torch.Tensor, directions: torch.Tensor, image: torch.Tensor | None = None) -> torch.Tensor:
+        """(B, P, width) pre-activation of the first layer, computed per image then per pixel (``image``:
+        :meth:`image_invariants` of ``z``, when the caller has them already)."""
+        zx, _, zz = z.unflatten(-1, (-1, 3)).unbind(-1)                                    # (B, N)
         a_x = self.dot(zx) - self.cross(zz)                                                  # (B, width)
         a_z = self.dot(zz) + self.cross(zx)
         dx, dy, dz = directions.unbind(-1)
         geo = self.geo(torch.stack([dy, torch.sqrt(dx.square() + dz.square())], -1))       # (P, width)
-        image = torch.cat([zy, torch.sqrt(zx.square() + zz.square() + 1e-6)], -1)
+        image = self.image_invariants(z) if image is None else image
         return (a_x[:, None] * dx[None, :, None] + a_z[:, None] * dz[None, :, None] + geo[None]
                 + self.cond[0](image)[:, None])
 
     def forward(self, z: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:
-        zx, zy, zz = z.unflatten(-1, (-1, 3)).unbind(-1)
-        image = torch.cat([zy, torch.sqrt(zx.square() + zz.square() + 1e-6)], -1)        # (B, 2N)
-        h = torch.sin(self.OMEGA * self.first_layer(z, directions))
+        image = self.image_invariants(z)                                                     # (B, 2N)
+        h = torch.sin(self.OMEGA * self.first_layer(z, directions, image))
         for norm, mlp, cond in zip(self.norms, self.hidden, self.cond[1:]):
             h = h + mlp(norm(h)) + cond(image)[:, None]
         return self.out(self.out_norm(h))
