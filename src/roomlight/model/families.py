@@ -12,7 +12,8 @@ from pathlib import Path
 
 from roomlight.errors import RoomlightError
 from roomlight.model.config import PRESETS, ModelConfig
-from roomlight.model.veni import VENI_FORMAT, VENI_PRESETS, VeniConfig, VeniVAE, checkpoint_format
+from roomlight.model.veni import VENI_FORMAT, VENI_PRESETS, VeniConfig, VeniVAE
+from roomlight.model.weights import checkpoint_format
 
 __all__ = ["model_preset", "build_model", "load_model", "is_veni", "ALL_PRESETS"]
 

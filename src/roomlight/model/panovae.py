@@ -119,22 +119,11 @@ class PanoVAE(SavedPrior, nn.Module):
         mean (default in eval mode). The latitude channels are appended inside.
         """
         posterior = self.encode_normalized(x)
-        if sample is None:
-            sample = self.training
-        z = posterior.sample(generator) if sample else posterior.mode()
-        return self.decode_normalized(z), posterior
+        return self.decode_normalized(self._posterior_latent(posterior, sample, generator)), posterior
 
     forward = forward_normalized
 
     # ------------------------------------------------------------------ physical domain
-    def _require_normalization(self) -> Normalization:
-        if self.normalization is None:
-            raise RoomlightError(
-                "PanoVAE has no normalisation statistics; compute them with "
-                "Normalization.from_data(...) and set model.normalization, or load a checkpoint"
-            )
-        return self.normalization
-
     def encode(self, radiance: torch.Tensor, depth: torch.Tensor) -> DiagonalGaussian:
         """Posterior for linear radiance (B, 3, H, W) and radial depth (B, 1, H, W).
 

@@ -35,6 +35,21 @@ class SavedPrior:
     FORMAT_VERSION: int
     CONFIG_CLASS: type
 
+    def _require_normalization(self) -> Normalization:
+        """The input statistics :meth:`encode` / :meth:`decode` need; a clear error when unset."""
+        if self.normalization is None:
+            raise RoomlightError(
+                f"{type(self).__name__} has no normalisation statistics; compute them with "
+                "Normalization.from_data(...) and set model.normalization, or load a checkpoint")
+        return self.normalization
+
+    def _posterior_latent(self, posterior, sample: bool | None, generator=None):
+        """The latent a reconstruction decodes: a reparameterised sample of ``posterior`` when
+        ``sample`` (default: while training), else its mean."""
+        if sample is None:
+            sample = self.training
+        return posterior.sample(generator) if sample else posterior.mode()
+
     def save_pretrained(self, directory: str | Path, training_config=None) -> Path:
         """Write ``model.safetensors`` + ``config.json`` into ``directory`` (created if needed).
 

@@ -26,7 +26,6 @@ columns: both exactly, up to float rounding (tests/test_veni.py).
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -287,10 +286,7 @@ class VeniVAE(SavedPrior, nn.Module):
         """Reconstruct x (B, 4, H, W): (x_hat (B, 4, H, W), posterior). VENI passes the input's depth
         channel through unchanged, so the training objective's depth terms are zero for it."""
         posterior = self.encode_normalized(x)
-        if sample is None:
-            sample = self.training
-        z = posterior.sample(generator) if sample else posterior.mode()
-        x_hat = self.decode_normalized(z)
+        x_hat = self.decode_normalized(self._posterior_latent(posterior, sample, generator))
         if not self.has_depth:
             x_hat = torch.cat([x_hat, x[:, 3:4].detach()], 1)
         return x_hat, posterior
@@ -298,11 +294,6 @@ class VeniVAE(SavedPrior, nn.Module):
     forward = forward_normalized
 
     # ------------------------------------------------------------------ physical domain
-    def _require_normalization(self) -> Normalization:
-        if self.normalization is None:
-            raise RoomlightError("VeniVAE has no normalisation statistics; load a checkpoint or set .normalization")
-        return self.normalization
-
     def encode(self, radiance: torch.Tensor, depth: torch.Tensor | None = None) -> DiagonalGaussian:
         """Posterior for radiance (B, 3, H, W) and depth (B, 1, H, W) in metres (VENI: depth may be None)."""
         if depth is None:
@@ -330,11 +321,3 @@ class VeniVAE(SavedPrior, nn.Module):
         if not (directory / CONFIG_NAME).is_file() or not (directory / WEIGHTS_NAME).is_file():
             raise InputFileError(directory, f"not a VENI checkpoint: expected {CONFIG_NAME} + {WEIGHTS_NAME}")
         return cls._load_saved(directory).to(device).eval()
-
-
-def checkpoint_format(directory: str | Path) -> str | None:
-    """The ``format`` field of a checkpoint folder's config.json (None when absent or unreadable)."""
-    try:
-        return json.loads((Path(directory) / "config.json").read_text()).get("format")
-    except (OSError, ValueError, AttributeError):
-        return None

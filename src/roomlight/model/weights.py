@@ -70,6 +70,18 @@ def load_weights_file(path, sha256: str | None = None) -> dict:
                              "copy the checkpoint folder again, or retrain") from None
 
 
+def checkpoint_format(directory) -> str | None:
+    """The ``format`` field of a checkpoint folder's ``config.json``: which model family wrote it
+    (None when the file is absent, unreadable or has none, as in the authors' run folders)."""
+    import json
+    from pathlib import Path
+
+    try:
+        return json.loads((Path(directory) / "config.json").read_text(encoding="utf-8")).get("format")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
 def read_config_json(path, format_name: str, format_version: int) -> dict:
     """The JSON object of a checkpoint's ``config.json`` whose ``format`` is ``format_name`` and whose
     ``format_version`` is at most ``format_version``; anything else raises :class:`InputFileError`
