@@ -9,6 +9,7 @@ import math
 import pytest
 import torch
 
+from roomlight.errors import RoomlightError
 from roomlight.model.equivariant import SO2Linear, VNAttention, VNBlock, VNLayerNorm, VNLinear, VNReLU, rotate_planar
 from roomlight.model.normalization import Normalization
 from roomlight.model.veni import VENI_PRESETS, VeniConfig, VeniField, VeniVAE, rotate_latent
@@ -252,8 +253,11 @@ def test_fit_photo_with_veni_d_places_its_2p5d_light_and_veni_shows_light_at_inf
                        veni_model=str(veni_models / "veni-tiny"), veni_d_model=str(veni_models / "veni-d-tiny"))
     mesh = fit_photo(case, "veni-d", cfg, progress=False)
     env = fit_photo(case, "veni", cfg, progress=False)
-    assert mesh.initial["init"] == "samples" and env.initial["init"] == "samples"  # no view encoder: the paper's start
-    assert env.initial.get("note", "").startswith("no depth")
+    # no view encoder: the paper's start for VENI+D; VENI's draws have no depth to rank them, so its mean room
+    assert mesh.initial["init"] == "samples" and env.initial["init"] == "zero"
+    with pytest.raises(RoomlightError, match="pass --init zero"):
+        fit_photo(case, "veni", photo_config("fast", init="samples", veni_model=str(veni_models / "veni-tiny")),
+                  progress=False)
     assert mesh.model.kind == "mesh" and env.model.kind == "envmap"
     assert mesh.model.light_model.model.config == VENI_PRESETS["veni-d-tiny"]
     assert len(mesh.result.history) >= 4 and len(env.result.history) >= 4

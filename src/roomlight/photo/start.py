@@ -6,7 +6,8 @@
 - ``samples``: the paper's start: ``init_samples`` draws from N(0, I), keeping the one whose
   decoded room is largest (:func:`roomlight.photo.placement.initial_latent`).
 - ``zero``: the prior's mean room, z = 0.
-- ``auto`` (the default): ``view`` when the prior has a view encoder, else ``samples``.
+- ``auto`` (the default): ``view`` when the prior has a view encoder, else ``samples``, else (a
+  radiance-only prior such as VENI, whose draws have no depth to rank them by) ``zero``.
 
 Whatever the start, the scene is then placed inside the decoded room and the exposure matched
 to the photograph (:mod:`roomlight.photo.placement`).
@@ -35,11 +36,16 @@ def resolve_start(mode: str, model) -> str:
     if mode not in START_MODES:
         raise RoomlightError(f"init {mode!r}: expected one of {', '.join(START_MODES)}")
     has_view = getattr(model, "view_encoder", None) is not None
+    has_depth = getattr(model, "has_depth", True)
     if mode == "auto":
-        return "view" if has_view else "samples"
+        return "view" if has_view else "samples" if has_depth else "zero"
     if mode == "view" and not has_view:
         raise RoomlightError("--init view needs a prior with a view encoder (a view_encoder/ folder beside its "
                              "weights; train one with `roomlight train-view-encoder`), or pass --init samples")
+    if mode == "samples" and not has_depth:
+        # the paper's start ranks its draws by the size of their rooms, which a radiance-only prior lacks
+        raise RoomlightError("--init samples ranks random rooms by their depth, which this prior does not "
+                             "decode (an env-map prior); pass --init zero")
     return mode
 
 
@@ -97,9 +103,6 @@ def start_latent(mode: str, model, case, config) -> tuple[torch.Tensor, dict]:
     mode = resolve_start(mode, model)
     if mode == "view":
         z, _, info = view_latent(model, case)
-    elif mode == "samples" and not getattr(model, "has_depth", True):
-        # the draws are ranked by the depth of their rooms; a radiance-only prior (VENI) has none
-        z, info = torch.zeros(model.config.latent_dim), {"note": "no depth to rank draws by: the zero latent"}
     elif mode == "samples":
         z, medians = initial_latent(model, config.init_samples, config.seed)
         info = {"latent_draws": len(medians), "median_depths": [round(m, 4) for m in medians]}
