@@ -4,7 +4,7 @@ For a few generated rooms at 128x256 this renders each configuration below and c
 with a high-spp reference of the same room (multi-jittered, max depth 8, so the PSNR counts
 both the noise and the bias of cutting paths short):
 
-- ``plain``: the issue's baseline, Mitsuba ``path`` with the independent sampler, max depth 6;
+- ``plain``: the reference baseline, Mitsuba ``path`` with the independent sampler, max depth 6;
 - ``synth``: what ``roomlight synth`` does, multi-jittered samples per pixel, max depth 5;
 - ``synth+oidn``: the same, denoised by Intel OIDN with light-source pixels kept (``--denoise``;
   only when ``pyoidn`` is importable).

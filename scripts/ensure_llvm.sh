@@ -13,4 +13,4 @@ for d in /usr/lib/llvm-1[6-9]/lib /usr/lib/llvm-2[0-9]/lib; do
 done
 . "$(dirname "$0")/apt_install.sh"
 # Not fatal when it fails: a CUDA-only machine does not need it, and the README says what to do.
-apt_install libllvm19 "Mitsuba's CPU backend; or install LLVM 16+ and set DRJIT_LIBLLVM_PATH, see README 'Troubleshooting'" || true
+apt_install libllvm19 "Mitsuba's CPU backend; or install LLVM 16+ and set DRJIT_LIBLLVM_PATH, see docs/troubleshooting.md" || true

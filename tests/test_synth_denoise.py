@@ -59,7 +59,7 @@ def test_denoiser_keeps_light_sources_and_the_seam():
 def test_denoised_room_is_closer_to_the_reference_and_keeps_hdr_peaks(mi):
     """A sunny room at 32x64: 16 spp + OIDN against a 1024-spp render of the same room.
 
-    Checks the issue's conditions on a denoiser: it must lower the error (tone-mapped PSNR)
+    Checks what a denoiser must do: it must lower the error (tone-mapped PSNR)
     and keep the HDR peaks (the sun and sky seen through the window, the brightest 0.1 %)."""
     from roomlight.io.panorama import exposure_calibrate
     from roomlight.synth.camera import render_aovs, render_radiance

@@ -2,7 +2,7 @@
 
 The photo's oracle panorama (the room captured at the oracle centre, ``truth/oracle.exr``) is
 fitted by the prior's latent (:func:`roomlight.fit.latent.fit_latent`, radiance and depth, from
-the encoder's mean with depth weighted 3x, the README's protocol), and that decoded panorama is
+the encoder's mean with depth weighted 3x, the protocol the bundled prior is scored by), and that decoded panorama is
 the light, in the oracle's frame. Comparing it with ``oracle`` measures what the prior's latent
 space loses; comparing the photo fits with it measures what fitting from one photograph loses.
 """
