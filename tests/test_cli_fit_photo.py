@@ -160,3 +160,22 @@ def test_fit_photo_writes_every_output(tmp_path):
     probes = json.loads((out / "probes.json").read_text())
     assert len(probes["sites"]) == 2 and probes["rows"] == ["prior", "direct-envmap"]
     assert "prior: best iteration" in r.output and "probes: 2 positions under 2 light(s)" in r.output
+
+
+def test_presets_are_ordered_by_work_and_named_in_help():
+    """Each preset is valid; ``balanced`` lies between ``fast`` and ``paper`` in rendering work
+    (steps x samples x fitted pixels) and is offered by ``--preset``."""
+    from click.testing import CliRunner
+
+    from roomlight.photo.config import PHOTO_PRESETS
+
+    def work(cfg):
+        return cfg.iterations * cfg.spp * cfg.render_size ** 2
+
+    for cfg in PHOTO_PRESETS.values():
+        cfg.validate()
+    fast, balanced, paper = (PHOTO_PRESETS[k] for k in ("fast", "balanced", "paper"))
+    assert work(fast) < work(balanced) < work(paper)
+    assert fast.iterations < balanced.iterations < paper.iterations
+    help_text = CliRunner().invoke(cli, ["fit-photo", "--help"]).output
+    assert "balanced" in help_text and f"{balanced.iterations} it" in help_text

@@ -9,6 +9,7 @@ from roomlight.photo.config import PHOTO_PRESETS, PhotoFitConfig
 from roomlight.photo.fitter import PHOTO_METHODS
 
 _FAST = PHOTO_PRESETS["fast"]
+_BALANCED = PHOTO_PRESETS["balanced"]
 
 
 @click.command("fit-photo")
@@ -45,7 +46,8 @@ _FAST = PHOTO_PRESETS["fast"]
 @click.option("--preset", type=click.Choice(list(PHOTO_PRESETS)), default="paper", show_default=True,
               help=f"paper: the paper's settings ({PhotoFitConfig.iterations} it, {PhotoFitConfig.spp} spp, "
                    f"{PhotoFitConfig.render_size} px); fast: a few minutes on a laptop CPU ({_FAST.iterations} it, "
-                   f"{_FAST.spp} spp, {_FAST.render_size} px).")
+                   f"{_FAST.spp} spp, {_FAST.render_size} px); balanced: between them ({_BALANCED.iterations} it, "
+                   f"{_BALANCED.spp} spp, {_BALANCED.render_size} px).")
 @click.option("--iterations", type=int, default=None, help="Override: optimisation steps.")
 @click.option("--spp", type=int, default=None, help="Override: samples per pixel per step.")
 @click.option("--seed", type=int, default=None, help=f"Override: base seed {default_of(PhotoFitConfig, 'seed')}.")

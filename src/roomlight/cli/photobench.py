@@ -91,7 +91,7 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, inserts, dep
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior for the prior methods [default: the prior bundled with roomlight].")
 @click.option("--preset", default="paper", show_default=True,
-              help="The fit-photo preset (paper, fast; see `roomlight fit-photo --help`).")
+              help="The fit-photo preset (paper, balanced, fast; see `roomlight fit-photo --help`).")
 @click.option("--eval-spp", type=int, default=DEFAULT_EVAL_SPP, show_default=True,
               help="Samples per pixel of the probe renders under the recovered lights.")
 @click.option("--shard", default=None, metavar="I/N", help="Run only cases I, I+N, I+2N, ... (0 <= I < N).")
