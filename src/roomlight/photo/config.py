@@ -80,8 +80,8 @@ class PhotoFitConfig(FitConfig):
 
 
 #: ``paper``: the paper's real-image settings; ``fast``: well under a minute on a 2-core CPU;
-#: ``balanced``: between the two, about ten times ``fast``'s rendering work (2.5x the steps at twice
-#: the samples; a photo's longest side fitted at up to 256 px).
+#: ``balanced``: between the two (2.5x ``fast``'s steps at twice the samples, a photo's longest side
+#: fitted at up to 256 px: 5-20x its rendering work, depending on the photo's size).
 PHOTO_PRESETS: dict[str, PhotoFitConfig] = {
     "paper": PhotoFitConfig(),
     "fast": PhotoFitConfig(iterations=120, spp=8, geometry_size=256, render_size=128, eval_every=10,
