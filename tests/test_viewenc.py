@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -239,3 +240,26 @@ def test_the_start_resolves_auto_and_refuses_view_without_an_encoder(tiny_prior)
         assert resolve_start("auto", tiny_prior) == "view"
     finally:
         tiny_prior.set_view_encoder(None)
+
+
+def test_an_encoder_trained_for_a_training_run_is_tied_to_its_best_weights(tiny_prior, tmp_path):
+    """``--model RUN`` names a training run; the encoder must record the checksum of the weights it
+    was trained for (RUN/best/model.safetensors), so that it loads beside them once bundled."""
+    from roomlight.data.toy import write_toy_dataset
+    from roomlight.model import PanoVAE
+    from roomlight.model.view_encoder import ViewEncoder
+    from roomlight.model.weights import file_sha256
+    from roomlight.viewenc.config import ViewTrainConfig
+    from roomlight.viewenc.trainer import ViewEncoderTrainer
+
+    tiny_prior.save_pretrained(tmp_path / "run" / "best")
+    write_toy_dataset(tmp_path / "data" / "train", 4, height=16)
+    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
+    cfg = ViewTrainConfig(batch_size=2, max_steps=1, val_every=1, ckpt_every=1, val_views=2, log_every=1,
+                          progress=False)
+    ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "enc", prior_path=tmp_path / "run",
+                       note=lambda *_: None).fit()
+    expected = file_sha256(tmp_path / "run" / "best" / "model.safetensors")
+    assert ViewEncoder.from_pretrained(tmp_path / "enc" / "best").prior_sha256 == expected
+    shutil.copytree(tmp_path / "enc" / "best", tmp_path / "run" / "best" / "view_encoder")
+    assert PanoVAE.from_pretrained(tmp_path / "run" / "best").view_encoder is not None

@@ -106,8 +106,13 @@ class ViewEncoderTrainer:
         self.note = note or print
         self.run_dir = Path(run_dir)
         self.prior_sha = None
-        if prior_path is not None and (Path(prior_path) / "model.safetensors").exists():
-            self.prior_sha = file_sha256(Path(prior_path) / "model.safetensors")
+        if prior_path is not None:
+            # a training run stands for its best/ model: the checksum is of the weights actually loaded
+            from roomlight.model.runs import resolve_run_model
+
+            weights = resolve_run_model(prior_path) / "model.safetensors"
+            if weights.exists():
+                self.prior_sha = file_sha256(weights)
         fresh = self._check_run(prior_path, data_dir)
         res = prior.config.resolution
         # The data first: a folder without usable panoramas stops the run before anything is written.
