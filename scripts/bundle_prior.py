@@ -98,6 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     # old bundle or the new one, never a mix of one's weights and the other's config.
     dest.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".bundle-", dir=dest.parent))
+    tmp.chmod(0o755)  # mkdtemp makes it private; package data must be readable by every user
     shutil.copyfile(src / WEIGHTS_NAME, tmp / WEIGHTS_NAME)
     (tmp / CONFIG_NAME).write_text(text)
     try:  # loading verifies the copy against the recorded weights_sha256

@@ -75,6 +75,7 @@ def test_bundling_copies_the_weights_and_appends_the_replaced_ones_to_the_histor
         b = PanoVAE.from_pretrained(run / "best").eval().decode(z)
     assert all(torch.equal(x, y) for x, y in zip(a, b))
     assert not any(p.name.startswith(".bundle-") or p.name.endswith(".replaced") for p in dest.parent.iterdir())
+    assert dest.stat().st_mode & 0o755 == 0o755      # package data: readable by every user
 
 
 def test_bundling_refuses_the_same_weights_and_another_architecture(bundle_and_run, tmp_path):

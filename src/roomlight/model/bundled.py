@@ -2,7 +2,7 @@
 
 =========  ======================================================================================
 ``prior``  the bundled prior (``assets/prior``): what every prior method uses without ``--model``
-``lite``   the earlier, smaller prior, kept for machines where speed matters more (when shipped)
+``lite``   the earlier, smaller prior (latent 128; ``assets/prior-lite``, with its view encoder)
 ``veni``   VENI, the rotation-equivariant env-map prior, trained like the bundled prior
 ``veni-d`` VENI+D, the same with a depth output, fitted as a 2.5D area light
 =========  ======================================================================================
