@@ -69,11 +69,14 @@ def test_the_gradient_reaches_c_as_finite_differences_say():
 
 
 def _cast_fit(tmp_path, cast, weight=None):
-    """Fit (s, c) with the latent frozen at the room the target was rendered under."""
-    from roomlight.demo import bundled_prior_path
-    from roomlight.model import PanoVAE
+    """Fit (s, c) with the latent frozen at the room the target was rendered under.
 
-    model = PanoVAE.from_pretrained(bundled_prior_path())
+    The room is decoded by the ``lite`` prior, with which the tolerances below were measured: the gain's
+    behaviour does not depend on which prior decodes the room, but the noise of a 60-step fit at 8 spp
+    does depend on the room (the bundled prior's room at the same seed leaves a neutral gain at 0.022)."""
+    from roomlight.model.runs import load_run_model
+
+    model = load_run_model("lite", device="cpu")
     z0 = torch.randn(model.config.latent_dim, generator=torch.Generator().manual_seed(5)) * 0.5
     with torch.no_grad():
         rad, depth = model.decode(z0[None])
