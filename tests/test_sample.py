@@ -143,3 +143,16 @@ def test_probe_render_and_figure(model_dir, tmp_path):
     probes = read_exr(tmp_path / "s" / "probes_000.exr")
     assert probes["R"].shape == (16, 16) and np.isfinite(probes["R"]).all()
     assert (tmp_path / "s" / "samples.png").stat().st_size > 1000
+
+
+def test_sample_and_fit_pano_take_a_bundled_model_by_name_and_refuse_a_missing_path_in_one_line(tmp_path):
+    from roomlight.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["sample", "--model", "lite", "--n", "1", "--no-render", "--no-emitters",
+                                      "--out", str(tmp_path / "s")])
+    assert res.exit_code == 0, res.output
+    assert read_panorama(tmp_path / "s" / "sample_000.exr").radiance.shape == (64, 128, 3)
+    for command in (["sample", "--out", str(tmp_path / "t")], ["fit-pano", str(tmp_path / "s" / "sample_000.exr")]):
+        res = CliRunner().invoke(cli, [*command, "--model", str(tmp_path / "no-such-run")])
+        assert res.exit_code != 0 and "no such file or directory" in res.output
+        assert "Traceback" not in res.output

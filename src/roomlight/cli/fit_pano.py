@@ -11,8 +11,9 @@ from roomlight.cli.common import echo_fixes, fail, parse_sets, repair_options, s
 
 
 @click.command("fit-pano")
-@click.option("--model", "model_path", required=True, type=click.Path(exists=True),
-              help="Model directory, training run (uses RUN/best) or the authors' run folder.")
+@click.option("--model", "model_path", required=True, type=click.Path(),
+              help="Model directory, training run (uses RUN/best), the authors' run folder, or a bundled "
+                   "model by name: prior (the bundled prior), lite.")
 @click.argument("pano", type=click.Path(exists=True, dir_okay=False))
 @click.option("--depth", "depth_path", type=click.Path(exists=True, dir_okay=False), default=None,
               help="Separate depth file when PANO has no depth channel.")

@@ -30,8 +30,9 @@ def _encode_file(model, path, fit_steps: int, sets: dict, repairs: dict):
 
 
 @click.command("sample")
-@click.option("--model", "model_path", required=True, type=click.Path(exists=True),
-              help="Model directory, training run (uses RUN/best) or the authors' run folder.")
+@click.option("--model", "model_path", required=True, type=click.Path(),
+              help="Model directory, training run (uses RUN/best), the authors' run folder, or a bundled "
+                   "model by name: prior (the bundled prior), lite.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False))
 @click.option("--n", "count", type=int, default=8, show_default=True,
               help="Number of samples (or interpolation steps).")
