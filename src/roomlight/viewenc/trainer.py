@@ -105,9 +105,10 @@ class ViewEncoderTrainer:
             p.requires_grad_(False)
         self.note = note or print
         self.run_dir = Path(run_dir)
-        self.prior_sha = None
-        if prior_path is not None:
-            # a training run stands for its best/ model: the checksum is of the weights actually loaded
+        # the checksum loading verified, else (weights saved before checksums) the file's: a training run
+        # stands for its best/ model, so the file is the one resolve_run_model loaded
+        self.prior_sha = getattr(prior, "_weights_sha256", None)
+        if self.prior_sha is None and prior_path is not None:
             from roomlight.model.runs import resolve_run_model
 
             weights = resolve_run_model(prior_path) / "model.safetensors"
