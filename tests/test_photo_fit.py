@@ -83,7 +83,7 @@ def test_joint_fit_of_light_and_materials(photo, prior, tmp_path, one_torch_thre
     checks = [h["fixed_seed_loss"] for h in fit.result.history if "fixed_seed_loss" in h]
     assert fit.result.best_loss < checks[0]
     record = fit.result.history[1]
-    for term in ("img", "rep", "frustum", "frustum_depth", "z_prior"):
+    for term in ("img", "rep", "frustum", "frustum_depth", "z_prior", "albedo_prior"):
         assert term in record and np.isfinite(record[term]), term
     assert len(fit.fitter.points) == 2 * 64 + 64  # object points of both spheres + free-space points
     assert not torch.allclose(fit.materials.values(), torch.full_like(fit.materials.values(), 0.5))
@@ -154,8 +154,10 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
     2.5D light (mirror RMSE 1.02 against 1.00 at 80 steps) while the far one already is (0.53 against 1.77).
 
     The 2.5D fit from the view encoder's start does better still at both positions, in half the steps
-    (measured at 60 steps: mirror RMSE 0.24 and 0.22, against 0.69 and 0.49 from the paper's start at 120
-    and 1.11 and 1.52 for the env map; 0.27 and 0.25 at 40 steps, not yet half of the paper's start). From that start the prior's env map is as good on this small scene (0.20 and 0.19),
+    (measured at 60 steps, with the reflectance prior on the albedos: mirror RMSE 0.24 and 0.22, against
+    0.47 and 0.41 from the paper's start at 120 and 1.31 and 1.23 for the env map; without the reflectance
+    prior the paper's start reached 0.69 and 0.49 and the env map 1.11 and 1.52). From the view start the
+    prior's env map is as good on this small scene (0.20 and 0.19, measured without the reflectance prior),
     so the claim above holds in the paper's setting only."""
     from roomlight.photo import fit_photo
     from roomlight.photo.outputs import light_view
@@ -190,7 +192,7 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
                           for k in range(2)]
     for k in range(2):
         assert errors["prior"][k] < errors["prior-envmap"][k], errors
-        assert errors["prior from the view"][k] < 0.5 * errors["prior"][k], errors
+        assert errors["prior from the view"][k] < 0.6 * errors["prior"][k], errors
 
 
 def test_the_view_start_keeps_the_camera_at_the_room_centre(photo, prior, one_torch_thread):

@@ -43,13 +43,24 @@ STATE_FILE = ".fit-state.safetensors"
 
 
 class PhotoModel(LightModel):
-    """A light model and the objects' materials, optimised together."""
+    """A light model and the objects' materials, optimised together.
 
-    def __init__(self, light: LightModel, materials: ObjectMaterials):
+    Args:
+        light: the light model.
+        materials: the objects' materials.
+        albedo_prior: weight of the materials' reflectance prior (:meth:`ObjectMaterials.albedo_prior`);
+            0 leaves it out.
+        albedo_prior_mean: the typical mean albedo that prior is centred on.
+    """
+
+    def __init__(self, light: LightModel, materials: ObjectMaterials, albedo_prior: float = 0.0,
+                 albedo_prior_mean: float = 0.3):
         super().__init__()
         self.light_model = light
         self.materials = materials
         self.kind = light.kind
+        self.albedo_prior = float(albedo_prior)
+        self.albedo_prior_mean = float(albedo_prior_mean)
 
     @property
     def resolution(self):
@@ -64,7 +75,10 @@ class PhotoModel(LightModel):
         return self.light_model.emitter()
 
     def regularizers(self):
-        return self.light_model.regularizers()
+        terms = dict(self.light_model.regularizers())
+        if self.albedo_prior > 0:
+            terms["albedo_prior"] = self.albedo_prior * self.materials.albedo_prior(self.albedo_prior_mean)
+        return terms
 
     def describe(self):
         v = self.materials.values().detach()
@@ -263,7 +277,11 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
 
     if materials is None:
         materials = ObjectMaterials(geometry.labels_present)
-    photo_model = PhotoModel(light, materials)
+    # The reflectance prior settles how the brightness splits between a free light and the albedos;
+    # under a light held fixed there is nothing to split, and the prior would only bias the albedos.
+    light_is_free = any(p.requires_grad for p in light.parameters())
+    photo_model = PhotoModel(light, materials, config.albedo_prior if light_is_free else 0.0,
+                             config.albedo_prior_mean)
     sensor = photo_sensor(geometry.intrinsics, transform)
     escene = EmitterScene(light.kind, light.resolution, objects=object_shapes(geometry.objects, transform),
                           sensor=sensor, integrator={"type": "prb", "max_depth": int(config.max_depth)})

@@ -57,6 +57,23 @@ class ObjectMaterials(torch.nn.Module):
         """(n, 5) albedo R, G, B, roughness, metallic in (0, 1), differentiable."""
         return torch.sigmoid(self.logits)
 
+    def albedo_prior(self, typical: float) -> torch.Tensor:
+        """Mean over the objects of (1 - metallic) * ln(a / typical)^2, a the object's mean albedo over R, G, B.
+
+        A photograph alone cannot split an object's brightness between its albedo and the light: the
+        same pixels come from twice the light on half the albedo. This term is the log-normal prior
+        on reflectance that settles it, centred on ``typical``; colour stays free (only the mean over
+        the channels is held) and metals (whose base colour is a specular reflectance, often near 1)
+        are exempt by their fitted metallic value, taken as a constant so that the term cannot be
+        escaped by making an object metallic. A scalar tensor, 0 without objects.
+        """
+        if not self.labels:
+            return self.logits.sum() * 0.0
+        v = self.values()
+        mean_albedo = v[:, :3].mean(dim=1).clamp_min(1e-6)
+        dielectric = 1.0 - v[:, 4].detach()
+        return (dielectric * torch.log(mean_albedo / float(typical)).square()).mean()
+
     def scene_values(self) -> dict[str, torch.Tensor]:
         """Each object's BSDF parameters by their ``mi.traverse`` key."""
         v = self.values()
