@@ -3,7 +3,8 @@
 A synthetic benchmark (``roomlight bench run``) or a photo benchmark (``roomlight bench run-photos``)
 was run twice on the same scenes, e.g. without and with the white balance. The second run's
 methods are renamed ``<method><suffix>`` and each is paired with every method of the first run:
-``METHOD+wb − baseline`` for each metric and material, as in the benchmark's own report.
+``METHOD+wb − baseline`` for each metric and material, as in the benchmark's own report (for a photo
+benchmark also the recovered materials and, per inserted object, the compositing scores).
 
 Run: .venv/bin/python scripts/compare_bench_runs.py BASE_RESULTS OTHER_RESULTS [--suffix +wb]
          [--method prior] [--view eval] [--out FILE.md]
@@ -17,21 +18,22 @@ import sys
 from pathlib import Path
 
 
-def _records(res: Path, suffix: str = "") -> tuple[list[dict], list[dict] | None]:
-    """(probe or scene records, material records or None) of a results folder."""
+def _records(res: Path, suffix: str = "") -> tuple[list[dict], list[dict] | None, list[dict] | None]:
+    """(probe or scene records, material records or None, inserted-object records or None) of a results folder."""
     if (res / "run.json").is_file() and json.loads((res / "run.json").read_text()).get("kind") == "photos":
-        from roomlight.photobench.report import collect_photo_results, material_records, probe_records
+        from roomlight.photobench.report import (collect_photo_results, insertion_records, material_records,
+                                                 probe_records)
 
         results = collect_photo_results(res)
         for r in results:
             r["method"] += suffix
-        return probe_records(results), material_records(results)
+        return probe_records(results), material_records(results), insertion_records(results)
     from roomlight.bench.report import collect_results
 
     recs = collect_results(res)
     for r in recs:
         r["method"] += suffix
-    return recs, None
+    return recs, None, None
 
 
 def main(argv=None) -> None:
@@ -47,8 +49,8 @@ def main(argv=None) -> None:
     from roomlight.errors import RoomlightError
 
     try:
-        base, base_mat = _records(args.base)
-        other, other_mat = _records(args.other, args.suffix)
+        base, base_mat, base_ins = _records(args.base)
+        other, other_mat, other_ins = _records(args.other, args.suffix)
     except RoomlightError as exc:
         sys.exit(f"error: {exc}")
     method = args.method + args.suffix
@@ -64,6 +66,13 @@ def main(argv=None) -> None:
                                 higher_is_better=higher)
         md += ["## The recovered materials", "",
                paired_markdown(pm, method, ["objects"], {k: f"Δ {k}" for k in MATERIAL_METRICS}, note=False)]
+    if base_ins and other_ins:
+        from roomlight.photobench.report import INSERT_LABELS, INSERT_METRICS
+
+        pi = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(INSERT_METRICS),
+                                higher_is_better=INSERT_METRICS)
+        md += ["", "## The inserted objects (paired per object)", "",
+               paired_markdown(pi, method, ["objects"], {k: f"Δ {v}" for k, v in INSERT_LABELS.items()}, note=False)]
     text = "\n".join(md)
     print(text)
     if args.out:

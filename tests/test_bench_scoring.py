@@ -210,3 +210,38 @@ def test_two_runs_compared_scene_by_scene(tmp_path, capsys):
     assert "| prior | Δ PSNR LDR (dB, ↑) | +0.75 [" in md and "| prior | Δ angular error (°, ↓) | -2.500 [" in md
     # prior+wb - direct-sphere: angle -1 and 0 (mean -0.5, one win)
     assert "| direct-sphere | Δ angular error (°, ↓) | -0.500 [" in md and " 1/2" in md
+
+
+def _fake_photo_run(res: Path, cases) -> None:
+    """A photo benchmark results folder: cases (photo, method, diffuse PSNR, [region PSNR per inserted object])."""
+    import json
+
+    res.mkdir(parents=True)
+    (res / "run.json").write_text(json.dumps({"kind": "photos"}))
+    for photo, method, psnr, regions in cases:
+        folder = res / "cases" / photo / method
+        folder.mkdir(parents=True)
+        probes = {m: {"psnr_ldr": psnr, "rmse_hdr": 0.1, "angular_error": 3.0} for m in ("diffuse", "matte", "mirror")}
+        insertion = [{"id": f"insert{k + 1}", "visible": True, "distance_m": 2.0 + k, "psnr_ldr": v, "ssim": 0.5,
+                      "object_psnr_ldr": v - 3.0, "rmse_hdr": 0.2} for k, v in enumerate(regions)]
+        (folder / "result.json").write_text(json.dumps({"photo": photo, "method": method, "probes": probes,
+                                                         "insertion": insertion}))
+
+
+def test_two_photo_runs_compared_object_by_object_for_insertion(tmp_path):
+    """On a photo benchmark the inserted objects are paired per photo and object, not per photo."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "compare_bench_runs", Path(__file__).resolve().parents[1] / "scripts" / "compare_bench_runs.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    _fake_photo_run(tmp_path / "a", [("p1", "prior", 15.0, [20.0, 22.0]), ("p2", "prior", 16.0, [18.0, 25.0])])
+    _fake_photo_run(tmp_path / "b", [("p1", "prior", 17.0, [21.0, 22.0]), ("p2", "prior", 16.5, [20.0, 24.0])])
+    mod.main([str(tmp_path / "a"), str(tmp_path / "b"), "--suffix", "+ap", "--out", str(tmp_path / "cmp.md")])
+    md = (tmp_path / "cmp.md").read_text()
+    # probes per photo: +2.0 and +0.5, mean +1.25
+    assert "| prior | Δ PSNR LDR (dB, ↑) | +1.25 [" in md
+    # inserted objects: +1, 0, +2, -1 over four objects, mean +0.50, two won
+    section = md.split("## The inserted objects")[1]
+    assert "| prior | Δ region PSNR LDR ↑ | +0.50 [" in section and " 2/4" in section

@@ -52,7 +52,8 @@ class PhotoFitConfig(FitConfig):
     placement_steps: int = 200            #: steps placing the camera and objects inside the initial room
     checkpoint_every: int = 25            #: save the fit's state every this many iterations (0 = never)
     albedo_prior: float = 0.3             #: weight of the log-normal reflectance prior on the objects' mean albedo (0 = off)
-    albedo_prior_mean: float = 0.3        #: the typical mean albedo that prior is centred on
+    albedo_prior_mean: float = 0.3        #: the typical mean albedo over R, G, B that prior is centred on
+    albedo_prior_average: str = "arithmetic"  #: which mean over R, G, B it holds: arithmetic or geometric (see docs/photo.md)
     probe_count: int = 4                  #: probe positions on the object surfaces (probes.png)
     probe_size: float = 0.06              #: probe radius as a fraction of its distance to the camera
     probe_resolution: int = 96            #: pixels of each probe close-up (square)
@@ -76,6 +77,8 @@ class PhotoFitConfig(FitConfig):
             (0 < self.probe_size < 1, "probe_size must be in (0, 1)"),
             (self.albedo_prior >= 0, "albedo_prior must be >= 0"),
             (0 < self.albedo_prior_mean < 1, "albedo_prior_mean must be in (0, 1)"),
+            (self.albedo_prior_average in ("geometric", "arithmetic"),
+             "albedo_prior_average must be geometric or arithmetic"),
         ]
         for ok, message in checks:
             if not ok:

@@ -51,16 +51,18 @@ class PhotoModel(LightModel):
         albedo_prior: weight of the materials' reflectance prior (:meth:`ObjectMaterials.albedo_prior`);
             0 leaves it out.
         albedo_prior_mean: the typical mean albedo that prior is centred on.
+        albedo_prior_average: the mean over R, G, B it holds, ``geometric`` or ``arithmetic``.
     """
 
     def __init__(self, light: LightModel, materials: ObjectMaterials, albedo_prior: float = 0.0,
-                 albedo_prior_mean: float = 0.3):
+                 albedo_prior_mean: float = 0.3, albedo_prior_average: str = "arithmetic"):
         super().__init__()
         self.light_model = light
         self.materials = materials
         self.kind = light.kind
         self.albedo_prior = float(albedo_prior)
         self.albedo_prior_mean = float(albedo_prior_mean)
+        self.albedo_prior_average = str(albedo_prior_average)
 
     @property
     def resolution(self):
@@ -77,7 +79,8 @@ class PhotoModel(LightModel):
     def regularizers(self):
         terms = dict(self.light_model.regularizers())
         if self.albedo_prior > 0:
-            terms["albedo_prior"] = self.albedo_prior * self.materials.albedo_prior(self.albedo_prior_mean)
+            terms["albedo_prior"] = self.albedo_prior * self.materials.albedo_prior(self.albedo_prior_mean,
+                                                                                 self.albedo_prior_average)
         return terms
 
     def describe(self):
@@ -281,7 +284,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     # under a light held fixed there is nothing to split, and the prior would only bias the albedos.
     light_is_free = any(p.requires_grad for p in light.parameters())
     photo_model = PhotoModel(light, materials, config.albedo_prior if light_is_free else 0.0,
-                             config.albedo_prior_mean)
+                             config.albedo_prior_mean, config.albedo_prior_average)
     sensor = photo_sensor(geometry.intrinsics, transform)
     escene = EmitterScene(light.kind, light.resolution, objects=object_shapes(geometry.objects, transform),
                           sensor=sensor, integrator={"type": "prb", "max_depth": int(config.max_depth)})

@@ -10,6 +10,8 @@ renderer's gradients reach them.
 
 from __future__ import annotations
 
+import math
+
 import torch
 
 from roomlight.errors import RoomlightError
@@ -57,22 +59,42 @@ class ObjectMaterials(torch.nn.Module):
         """(n, 5) albedo R, G, B, roughness, metallic in (0, 1), differentiable."""
         return torch.sigmoid(self.logits)
 
-    def albedo_prior(self, typical: float) -> torch.Tensor:
-        """Mean over the objects of (1 - metallic) * ln(a / typical)^2, a the object's mean albedo over R, G, B.
+    def albedo_prior(self, typical: float, average: str = "arithmetic") -> torch.Tensor:
+        """Mean over the objects of (1 - metallic) * ln(a / typical)^2, a the object's mean albedo.
 
         A photograph alone cannot split an object's brightness between its albedo and the light: the
         same pixels come from twice the light on half the albedo. This term is the log-normal prior
-        on reflectance that settles it, centred on ``typical``; colour stays free (only the mean over
-        the channels is held) and metals (whose base colour is a specular reflectance, often near 1)
-        are exempt by their fitted metallic value, taken as a constant so that the term cannot be
-        escaped by making an object metallic. A scalar tensor, 0 without objects.
+        on reflectance that settles it, centred on ``typical``. Metals (whose base colour is a
+        specular reflectance, often near 1) are exempt by their fitted metallic value, taken as a
+        constant so that the term cannot be escaped by making an object metallic.
+
+        ``average`` says which mean over R, G, B is held:
+
+        * ``"arithmetic"`` (default): a = mean over the channels of the albedo. Its gradient is the
+          same in absolute terms on every channel, so pulling a bright object down darkens its weak
+          channels proportionally more and tints it.
+        * ``"geometric"``: ln a = mean over the channels of ln(albedo). Its gradient is the same on
+          every channel's log albedo, so it scales an object without tinting it, and a per-channel
+          light gain whose log sums to zero (the white balance) leaves it unchanged. Colour-blind by
+          construction, yet on rendered photos it fitted worse than the arithmetic mean, colour
+          included (docs/photo.md); in the cases looked at, a saturated object's darkest channel
+          dragged its geometric mean down and the fit brightened the other channels to answer.
+
+        A scalar tensor, 0 without objects.
         """
         if not self.labels:
             return self.logits.sum() * 0.0
         v = self.values()
-        mean_albedo = v[:, :3].mean(dim=1).clamp_min(1e-6)
         dielectric = 1.0 - v[:, 4].detach()
-        return (dielectric * torch.log(mean_albedo / float(typical)).square()).mean()
+        if average == "geometric":
+            # ln of the sigmoid, computed stably: ln sigmoid(x) = -softplus(-x).
+            log_ratio = -torch.nn.functional.softplus(-self.logits[:, :3]).mean(dim=1) - math.log(float(typical))
+        elif average == "arithmetic":
+            # written as first measured, so that its runs reproduce to the last digit
+            log_ratio = torch.log(v[:, :3].mean(dim=1).clamp_min(1e-6) / float(typical))
+        else:
+            raise RoomlightError(f"albedo prior: unknown average {average!r}; choose geometric or arithmetic")
+        return (dielectric * log_ratio.square()).mean()
 
     def scene_values(self) -> dict[str, torch.Tensor]:
         """Each object's BSDF parameters by their ``mi.traverse`` key."""
