@@ -109,3 +109,14 @@ def test_bad_prior_settings_are_refused(field, value, message):
 
     with pytest.raises(RoomlightError, match=message.replace("(", r"\(").replace(")", r"\)")):
         photo_config("fast", **{field: value}).validate()
+
+
+def test_photo_fits_use_the_scalar_exposure_by_default_and_synthetic_fits_the_white_balance():
+    """The white balance measured worse on photographs (docs/results.md#white-balance) and stays on for
+    `roomlight fit`; every photo preset inherits the photo default, and --set can turn it back on."""
+    from roomlight.inverse.config import FitConfig
+    from roomlight.photo import PHOTO_PRESETS, photo_config
+
+    assert FitConfig().white_balance is True
+    assert all(cfg.white_balance is False for cfg in PHOTO_PRESETS.values())
+    assert photo_config("fast", white_balance=True).white_balance is True

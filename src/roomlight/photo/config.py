@@ -54,6 +54,10 @@ class PhotoFitConfig(FitConfig):
     albedo_prior: float = 0.3             #: weight of the log-normal reflectance prior on the objects' mean albedo (0 = off)
     albedo_prior_mean: float = 0.3        #: the typical mean albedo over R, G, B that prior is centred on
     albedo_prior_average: str = "arithmetic"  #: which mean over R, G, B it holds: arithmetic or geometric (see docs/photo.md)
+    #: the white balance beside the exposure (FitConfig.white_balance) is off for photos: measured on the
+    #: photo benchmark it raised the probes' colour error by 1.4-3.0 degrees and gained nothing
+    #: (docs/results.md#white-balance); --set white_balance=true turns it on
+    white_balance: bool = False
     probe_count: int = 4                  #: probe positions on the object surfaces (probes.png)
     probe_size: float = 0.06              #: probe radius as a fraction of its distance to the camera
     probe_resolution: int = 96            #: pixels of each probe close-up (square)
