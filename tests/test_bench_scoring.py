@@ -192,14 +192,20 @@ def test_report_without_results_fails_cleanly(tmp_path):
         write_report(tmp_path)
 
 
-def test_two_runs_compared_scene_by_scene(tmp_path, capsys):
-    """scripts/compare_bench_runs.py: the second run's prior against the first run's methods, paired by scene."""
+def _compare_script():
+    """scripts/compare_bench_runs.py loaded as a module."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location(
         "compare_bench_runs", Path(__file__).resolve().parents[1] / "scripts" / "compare_bench_runs.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
+    return mod
+
+
+def test_two_runs_compared_scene_by_scene(tmp_path, capsys):
+    """scripts/compare_bench_runs.py: the second run's prior against the first run's methods, paired by scene."""
+    mod = _compare_script()
     _fake_results(tmp_path / "a", [("r1", "matte", "prior", 20.0, 0.1, 4.0), ("r2", "matte", "prior", 22.0, 0.3, 6.0),
                                    ("r1", "matte", "direct-sphere", 21.0, 0.2, 3.0),
                                    ("r2", "matte", "direct-sphere", 21.0, 0.2, 3.0)])
@@ -230,12 +236,7 @@ def _fake_photo_run(res: Path, cases) -> None:
 
 def test_two_photo_runs_compared_object_by_object_for_insertion(tmp_path):
     """On a photo benchmark the inserted objects are paired per photo and object, not per photo."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location(
-        "compare_bench_runs", Path(__file__).resolve().parents[1] / "scripts" / "compare_bench_runs.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = _compare_script()
     _fake_photo_run(tmp_path / "a", [("p1", "prior", 15.0, [20.0, 22.0]), ("p2", "prior", 16.0, [18.0, 25.0])])
     _fake_photo_run(tmp_path / "b", [("p1", "prior", 17.0, [21.0, 22.0]), ("p2", "prior", 16.5, [20.0, 24.0])])
     mod.main([str(tmp_path / "a"), str(tmp_path / "b"), "--suffix", "+ap", "--out", str(tmp_path / "cmp.md")])
