@@ -3,7 +3,9 @@
 Run: .venv/bin/python scripts/bundle_prior.py RUN_OR_MODEL --data "DESCRIPTION" [--dest DIR]
          [--previous-note "TEXT"] [--dry-run]
 
-RUN_OR_MODEL is a training run (its ``best/`` model is taken) or a model folder. The weights are
+RUN_OR_MODEL is a training run (its ``best/`` model is taken) or a model folder of either model
+family (the panoramic VAE, or VENI / VENI+D, shipped as ``--dest src/roomlight/assets/veni`` and
+``.../veni-d``). The weights are
 copied byte for byte into DEST (default ``src/roomlight/assets/prior``) and its ``config.json`` is
 the new model's, with two additions in ``metadata``:
 
@@ -29,7 +31,8 @@ from pathlib import Path
 import torch
 
 from roomlight.errors import RoomlightError
-from roomlight.model.panovae import CONFIG_NAME, WEIGHTS_NAME, PanoVAE
+from roomlight.model.families import load_model
+from roomlight.model.saved import CONFIG_NAME, WEIGHTS_NAME
 from roomlight.model.runs import resolve_run_model
 from roomlight.model.weights import file_sha256
 
@@ -82,7 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     new_cfg = json.loads((src / CONFIG_NAME).read_text())
     dest = Path(args.dest)
     old_cfg = json.loads((dest / CONFIG_NAME).read_text()) if (dest / CONFIG_NAME).exists() else None
-    if old_cfg is not None and old_cfg.get("model") != new_cfg.get("model") and not args.allow_new_architecture:
+    if old_cfg is not None and (old_cfg.get("model") != new_cfg.get("model")
+                                or old_cfg.get("format") != new_cfg.get("format")) and not args.allow_new_architecture:
         sys.exit(f"{src} has another architecture than {dest} (model settings differ); "
                  "pass --allow-new-architecture if that is intended")
     if old_cfg is not None and old_cfg.get("weights_sha256") == file_sha256(src / WEIGHTS_NAME):
@@ -102,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     shutil.copyfile(src / WEIGHTS_NAME, tmp / WEIGHTS_NAME)
     (tmp / CONFIG_NAME).write_text(text)
     try:  # loading verifies the copy against the recorded weights_sha256
-        loaded, reference = PanoVAE.from_pretrained(tmp), PanoVAE.from_pretrained(src)
+        loaded, reference = load_model(tmp), load_model(src)
     except RoomlightError as e:
         shutil.rmtree(tmp)
         sys.exit(f"the copy does not load: {e}")

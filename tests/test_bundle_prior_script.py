@@ -91,3 +91,30 @@ def test_bundling_refuses_the_same_weights_and_another_architecture(bundle_and_r
     assert (dest / "config.json").read_text() == before
     assert _script().main([str(other), "--data", "x", "--dest", str(dest), "--allow-new-architecture"]) == 0
     assert json.loads((dest / "config.json").read_text())["model"]["latent_dim"] == 16
+
+
+def test_bundling_ships_a_veni_model_and_refuses_to_replace_one_family_by_the_other(bundle_and_run, tmp_path):
+    from roomlight.model.bundled import BUNDLED_MODELS
+    from roomlight.model.families import load_model
+    from roomlight.model.veni import VENI_PRESETS, VeniVAE
+
+    torch.manual_seed(3)
+    veni = VeniVAE(VENI_PRESETS["veni-d-tiny"], Normalization(mean=(0.5, 0.4, 0.3, 1.0), std=(0.7, 0.6, 0.5, 0.4)))
+    run = tmp_path / "veni-run"
+    veni.save_pretrained(run / "best", training_config={"max_steps": 7})
+    (run / "best" / "best.json").write_text(json.dumps({"step": 6, "metric": "val/total", "value": 2.0}))
+    dest = tmp_path / "assets" / BUNDLED_MODELS["veni-d"]
+    assert _script().main([str(run), "--data", "rooms C", "--dest", str(dest)]) == 0
+    assert (dest / "model.safetensors").read_bytes() == (run / "best" / "model.safetensors").read_bytes()
+    meta = json.loads((dest / "config.json").read_text())["metadata"]
+    assert meta["data"] == "rooms C" and meta["best_step"] == 6 and meta["earlier_schedules"] == []
+    shipped = load_model(dest)
+    assert isinstance(shipped, VeniVAE)
+    z = torch.randn(2, shipped.config.latent_dim)
+    with torch.no_grad():
+        assert all(torch.equal(a, b) for a, b in zip(shipped.eval().decode(z), veni.eval().decode(z)))
+    prior_dest, _ = bundle_and_run           # a VENI model over the panoramic VAE's bundle: refused
+    before = (prior_dest / "config.json").read_text()
+    with pytest.raises(SystemExit, match="another architecture"):
+        _script().main([str(run), "--data", "x", "--dest", str(prior_dest)])
+    assert (prior_dest / "config.json").read_text() == before
