@@ -90,6 +90,23 @@ def test_the_field_first_layer_equals_the_written_out_invariants():
     torch.testing.assert_close(f.first_layer(z, d), ref, atol=1e-12, rtol=1e-12)
 
 
+def test_the_field_is_differentiable_at_the_origin_of_the_latent():
+    """The posterior mean of a collapsed latent vector, and the fits' start z = 0, sit at the origin;
+    a norm |Z_i⊥| among the field's inputs put a cusp there (one-sided slopes of opposite sign, a
+    gradient of 0), which is what made the encoder's mean decode far worse than its samples. One-sided
+    finite differences must agree with the autograd directional derivative."""
+    f = VeniField(VENI_PRESETS["veni-d-tiny"]).double()
+    torch.manual_seed(1)
+    d = torch.nn.functional.normalize(torch.randn(40, 3, dtype=torch.float64), dim=-1)
+    z0 = torch.zeros(1, VENI_PRESETS["veni-d-tiny"].latent_dim, dtype=torch.float64)
+    v = torch.randn_like(z0)
+    _, jv = torch.autograd.functional.jvp(lambda z: f(z, d), (z0,), (v,))
+    eps = 1e-4
+    for sign in (1.0, -1.0):
+        one_sided = (f(z0 + sign * eps * v, d) - f(z0, d)) / (sign * eps)
+        torch.testing.assert_close(one_sided, jv, atol=1e-3 * float(jv.abs().max()), rtol=0)
+
+
 # ----------------------------------------------------------------------------- equivariance of the model
 @pytest.mark.parametrize("name", ["veni-tiny", "veni-d-tiny"])
 @pytest.mark.parametrize("k", [1, 5, 16])
@@ -146,6 +163,16 @@ def test_checkpoint_round_trip_through_the_common_loader(tmp_path):
     z = torch.randn(1, m.config.latent_dim)
     for a, b in zip(m.decode(z), back.decode(z)):
         assert torch.equal(a, b)
+    import json
+
+    cfg_path = tmp_path / "m" / "config.json"
+    cfg = json.loads(cfg_path.read_text())
+    cfg_path.write_text(json.dumps({**cfg, "format_version": 1}))      # the decoder that also took |Z_i⊥|
+    from roomlight.errors import InputFileError as _Refused
+
+    with pytest.raises(_Refused, match="format_version 1"):
+        load_run_model(tmp_path / "m", device="cpu")
+    cfg_path.write_text(json.dumps(cfg))
     (tmp_path / "m" / "model.safetensors").write_bytes(b"broken")
     from roomlight.errors import InputFileError
 

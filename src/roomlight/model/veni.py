@@ -16,7 +16,7 @@ Shapes (B batch, H x W the panorama, N latent vectors, latent_dim = 3 N):
              -> CLS -> SO2Linear heads: mean (B, N, 3), log-variance (B, N) (one per vector: isotropic)
     decoder: z (B, 3N) as Z (B, N, 3) = (x, y, z) per vector, directions ω (P, 3)
              -> per pixel   [<Z_i⊥, ω⊥>, Z_i⊥ × ω⊥ (i = 1..N), ω_y, |ω⊥|]   (invariant)
-             -> per image   [Z_iy, |Z_i⊥|]                                (added into every layer)
+             -> per image   [Z_iy]                                        (added into every layer)
              -> linear -> sine -> residual MLP -> (B, C, H, W) z-scored
 
 Rolling a panorama by k columns rotates its latent by δ = 2πk/W about the vertical axis
@@ -40,13 +40,16 @@ from roomlight.model.distributions import DiagonalGaussian
 from roomlight.model.equivariant import SO2Linear, VNBlock
 from roomlight.model.normalization import Normalization
 from roomlight.model.saved import CONFIG_NAME, WEIGHTS_NAME, SavedPrior
+from roomlight.model.weights import checkpoint_format_version
 
 __all__ = ["VeniConfig", "VENI_PRESETS", "VeniEncoder", "VeniField", "VeniVAE", "rotate_latent",
            "VENI_FORMAT"]
 
 #: ``format`` of a VENI checkpoint's config.json (a PanoVAE's is ``roomlight.panovae``).
 VENI_FORMAT = "roomlight.veni"
-VENI_FORMAT_VERSION = 1
+#: 2: the field's per-image inputs are Z_iy alone (version 1 also took |Z_i⊥|, which a posterior mean
+#: puts outside what training showed the field; docs/model.md). Version 1 checkpoints are refused.
+VENI_FORMAT_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -165,7 +168,7 @@ class VeniField(nn.Module):
     """The conditional neural field: z (B, 3N), directions (P, 3) -> (B, P, C) z-scored values.
 
     Its first layer is linear in the invariants [<Z_i⊥, ω⊥>, Z_i⊥ × ω⊥, ω_y, |ω⊥|] of each pixel plus
-    the image's [Z_iy, |Z_i⊥|], and is followed by a sine: the features are plane waves over the sphere
+    the image's [Z_iy], and is followed by a sine: the features are plane waves over the sphere
     whose directions and phases the latent sets. Written out, the inner products and cross products
     collapse to two per-image vectors a_x, a_z (B, width) with u = a_x ω_x + a_z ω_z + ..., so the first
     layer costs 4 multiply-adds per pixel and unit instead of 2N + 2.
@@ -181,7 +184,7 @@ class VeniField(nn.Module):
         self.dot = nn.Linear(n, width, bias=False)          # weights of <Z_i⊥, ω⊥>
         self.cross = nn.Linear(n, width, bias=False)        # weights of Z_i⊥ × ω⊥
         self.geo = nn.Linear(2, width)                      # ω_y, |ω⊥| and the bias
-        self.cond = nn.ModuleList(nn.Linear(2 * n, width) for _ in range(1 + c.field_blocks))
+        self.cond = nn.ModuleList(nn.Linear(n, width) for _ in range(1 + c.field_blocks))
         self.norms = nn.ModuleList(nn.LayerNorm(width) for _ in range(c.field_blocks))
         self.hidden = nn.ModuleList(nn.Sequential(nn.Linear(width, width), nn.SiLU(), nn.Linear(width, width))
                                     for _ in range(c.field_blocks))
@@ -191,7 +194,7 @@ class VeniField(nn.Module):
     @staticmethod
     def invariants(z: torch.Tensor, directions: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """The field's inputs written out (slow; for tests): per pixel (B, P, 2N + 2) = [<Z_i⊥, ω⊥>,
-        Z_i⊥ × ω⊥, ω_y, |ω⊥|] and per image (B, 2N) = [Z_iy, |Z_i⊥|]."""
+        Z_i⊥ × ω⊥, ω_y, |ω⊥|] and per image (B, N) = [Z_iy]."""
         zx, zy, zz = z.unflatten(-1, (-1, 3)).unbind(-1)                                   # (B, N)
         dx, dy, dz = directions.unbind(-1)                                                   # (P,)
         dot = zx[:, None, :] * dx[None, :, None] + zz[:, None, :] * dz[None, :, None]
@@ -199,13 +202,17 @@ class VeniField(nn.Module):
         b, p = z.shape[0], directions.shape[0]
         planar = torch.sqrt(dx.square() + dz.square())
         pixel = torch.cat([dot, cross, dy.expand(b, p)[..., None], planar.expand(b, p)[..., None]], -1)
-        return pixel, torch.cat([zy, torch.sqrt(zx.square() + zz.square() + 1e-6)], -1)
+        return pixel, zy
 
     @staticmethod
     def image_invariants(z: torch.Tensor) -> torch.Tensor:
-        """(B, 2N) the per-image inputs [Z_iy, |Z_i⊥|]."""
-        zx, zy, zz = z.unflatten(-1, (-1, 3)).unbind(-1)
-        return torch.cat([zy, torch.sqrt(zx.square() + zz.square() + 1e-6)], -1)
+        """(B, N) the per-image inputs [Z_iy].
+
+        Only components linear in z. A norm |Z_i⊥| would be invariant too, but training decodes
+        posterior samples, whose |Z_i⊥| is never near 0 where the posterior is wide, while the
+        posterior mean (the encoder's reconstruction, the fits' start z = 0) puts it at 0: a field
+        conditioned on it decoded means far worse than samples (docs/model.md)."""
+        return z.unflatten(-1, (-1, 3))[..., 1]
 
     def first_layer(self, z: torch.Tensor, directions: torch.Tensor, image: torch.Tensor | None = None) -> torch.Tensor:
         """(B, P, width) pre-activation of the first layer, computed per image then per pixel (``image``:
@@ -220,7 +227,7 @@ class VeniField(nn.Module):
                 + self.cond[0](image)[:, None])
 
     def forward(self, z: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:
-        image = self.image_invariants(z)                                                     # (B, 2N)
+        image = self.image_invariants(z)                                                     # (B, N)
         h = torch.sin(self.OMEGA * self.first_layer(z, directions, image))
         for norm, mlp, cond in zip(self.norms, self.hidden, self.cond[1:]):
             h = h + mlp(norm(h)) + cond(image)[:, None]
@@ -320,4 +327,9 @@ class VeniVAE(SavedPrior, nn.Module):
         directory = path if path.is_dir() else path.parent
         if not (directory / CONFIG_NAME).is_file() or not (directory / WEIGHTS_NAME).is_file():
             raise InputFileError(directory, f"not a VENI checkpoint: expected {CONFIG_NAME} + {WEIGHTS_NAME}")
+        version = checkpoint_format_version(directory)
+        if version is not None and version < VENI_FORMAT_VERSION:
+            raise InputFileError(directory, f"a VENI checkpoint of format_version {version}, whose decoder also "
+                                 f"took |Z_i⊥| (see docs/model.md, VENI); this roomlight reads version "
+                                 f"{VENI_FORMAT_VERSION}: retrain it with `roomlight train --config veni` / `veni-d`")
         return cls._load_saved(directory).to(device).eval()

@@ -70,6 +70,19 @@ def load_weights_file(path, sha256: str | None = None) -> dict:
                              "copy the checkpoint folder again, or retrain") from None
 
 
+def checkpoint_format_version(directory) -> int | None:
+    """The ``format_version`` field of a checkpoint folder's ``config.json`` (None when the file is
+    absent, unreadable or has no integer one)."""
+    import json
+    from pathlib import Path
+
+    try:
+        version = json.loads((Path(directory) / "config.json").read_text(encoding="utf-8")).get("format_version")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return version if isinstance(version, int) else None
+
+
 def checkpoint_format(directory) -> str | None:
     """The ``format`` field of a checkpoint folder's ``config.json``: which model family wrote it
     (None when the file is absent, unreadable or has none, as in the authors' run folders)."""
