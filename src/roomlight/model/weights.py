@@ -70,29 +70,28 @@ def load_weights_file(path, sha256: str | None = None) -> dict:
                              "copy the checkpoint folder again, or retrain") from None
 
 
-def checkpoint_format_version(directory) -> int | None:
-    """The ``format_version`` field of a checkpoint folder's ``config.json`` (None when the file is
-    absent, unreadable or has no integer one)."""
+def _config_field(directory, key: str):
+    """Field ``key`` of a checkpoint folder's ``config.json`` (None when the file is absent,
+    unreadable, not an object or has no such field)."""
     import json
     from pathlib import Path
 
     try:
-        version = json.loads((Path(directory) / "config.json").read_text(encoding="utf-8")).get("format_version")
+        return json.loads((Path(directory) / "config.json").read_text(encoding="utf-8")).get(key)
     except (OSError, ValueError, AttributeError):
         return None
+
+
+def checkpoint_format_version(directory) -> int | None:
+    """The ``format_version`` of a checkpoint folder's ``config.json`` (None without an integer one)."""
+    version = _config_field(directory, "format_version")
     return version if isinstance(version, int) else None
 
 
 def checkpoint_format(directory) -> str | None:
     """The ``format`` field of a checkpoint folder's ``config.json``: which model family wrote it
     (None when the file is absent, unreadable or has none, as in the authors' run folders)."""
-    import json
-    from pathlib import Path
-
-    try:
-        return json.loads((Path(directory) / "config.json").read_text(encoding="utf-8")).get("format")
-    except (OSError, ValueError, AttributeError):
-        return None
+    return _config_field(directory, "format")
 
 
 def read_config_json(path, format_name: str, format_version: int) -> dict:
