@@ -29,13 +29,8 @@ def _errors(model, x: torch.Tensor, x_hat: torch.Tensor) -> tuple[float, float |
 
 
 def _veni_decode(model, z_waves: torch.Tensor, z_image: torch.Tensor) -> torch.Tensor:
-    """VENI's field with its plane waves from ``z_waves`` and its per-image inputs from ``z_image``."""
-    f = model.field
-    image = f.image_invariants(z_image)
-    h = torch.sin(f.OMEGA * f.first_layer(z_waves, model.directions, image))
-    for norm, mlp, cond in zip(f.norms, f.hidden, f.cond[1:]):
-        h = h + mlp(norm(h)) + cond(image)[:, None]
-    out = f.out(f.out_norm(h))
+    """VENI's decoding (B, C, H, W) with its plane waves from ``z_waves`` and its per-image inputs from ``z_image``."""
+    out = model.field(z_waves, model.directions, image=model.field.image_invariants(z_image))   # (B, H W, C)
     height, width = model.config.resolution
     return out.transpose(1, 2).reshape(z_waves.shape[0], -1, height, width)
 

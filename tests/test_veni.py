@@ -168,13 +168,12 @@ def test_checkpoint_round_trip_through_the_common_loader(tmp_path):
     cfg_path = tmp_path / "m" / "config.json"
     cfg = json.loads(cfg_path.read_text())
     cfg_path.write_text(json.dumps({**cfg, "format_version": 1}))      # the decoder that also took |Z_i⊥|
-    from roomlight.errors import InputFileError as _Refused
+    from roomlight.errors import InputFileError
 
-    with pytest.raises(_Refused, match="format_version 1"):
+    with pytest.raises(InputFileError, match="format_version 1"):
         load_run_model(tmp_path / "m", device="cpu")
     cfg_path.write_text(json.dumps(cfg))
     (tmp_path / "m" / "model.safetensors").write_bytes(b"broken")
-    from roomlight.errors import InputFileError
 
     with pytest.raises(InputFileError):
         load_run_model(tmp_path / "m", device="cpu")

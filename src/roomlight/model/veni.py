@@ -226,8 +226,10 @@ class VeniField(nn.Module):
         return (a_x[:, None] * dx[None, :, None] + a_z[:, None] * dz[None, :, None] + geo[None]
                 + self.cond[0](image)[:, None])
 
-    def forward(self, z: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:
-        image = self.image_invariants(z)                                                     # (B, N)
+    def forward(self, z: torch.Tensor, directions: torch.Tensor, image: torch.Tensor | None = None) -> torch.Tensor:
+        """(B, P, C); ``image``: the per-image inputs (B, N), :meth:`image_invariants` of ``z`` by default
+        (scripts/mean_vs_sample.py takes them from another latent to find what a decoding depends on)."""
+        image = self.image_invariants(z) if image is None else image                       # (B, N)
         h = torch.sin(self.OMEGA * self.first_layer(z, directions, image))
         for norm, mlp, cond in zip(self.norms, self.hidden, self.cond[1:]):
             h = h + mlp(norm(h)) + cond(image)[:, None]
