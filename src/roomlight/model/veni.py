@@ -104,8 +104,9 @@ class VeniConfig(StrictConfig):
         return 4 if self.depth else 3
 
 
-#: ``veni`` / ``veni-d``: the bundled models' shapes (64 x 128, latent 129 = 43 vectors, next to the lite
-#: prior's 128); the ``-tiny`` ones are for tests (16 x 32).
+#: ``veni`` / ``veni-d``: 64 x 128, latent 129 = 43 vectors, next to the lite prior's 128. The bundled models
+#: are these with ``--set model_overrides.latent_vectors=171`` (latent 513, next to the bundled prior's 512).
+#: The ``-tiny`` ones are for tests (16 x 32).
 VENI_PRESETS: dict[str, VeniConfig] = {
     "veni": VeniConfig(),
     "veni-d": VeniConfig(depth=True),
