@@ -204,6 +204,37 @@ def test_training_resumes_bit_identically(tmp_path):
                for k, v in straight.items())  # it trained
 
 
+def test_a_second_schedule_starts_from_the_first_runs_weights_and_refuses_another_family(tmp_path):
+    """``train --config veni-d --init-from RUN``: the second schedule's network is the first run's best,
+    tensor for tensor, with its normalisation; a run of our prior cannot seed a VENI run."""
+    from roomlight.data import write_toy_dataset
+    from roomlight.errors import RoomlightError
+    from roomlight.train import Trainer, get_train_preset, resolve_run_model
+
+    write_toy_dataset(tmp_path / "data", 8, 32)
+    fast = dict(val_fraction=0.25, progress=False, log_every=1, val_every=2, ckpt_every=1000, image_every=0,
+                num_workers=0)
+    first = Trainer(get_train_preset("veni-d-tiny").replace(max_steps=4, **fast), tmp_path / "data",
+                    tmp_path / "first", device="cpu", note=lambda m: None)
+    first.fit()
+    first.close()
+    source = VeniVAE.from_pretrained(resolve_run_model(tmp_path / "first"))
+    cfg = get_train_preset("veni-d-tiny").replace(max_steps=2, lr=5e-4, init_from=str(tmp_path / "first"), **fast)
+    second = Trainer(cfg, tmp_path / "data", tmp_path / "second", device="cpu", note=lambda m: None)
+    src_state = source.state_dict()
+    for k, v in second.model.state_dict().items():
+        assert torch.equal(v, src_state[k]), k
+    assert second.model.normalization.to_dict() == source.normalization.to_dict()
+    second.close()
+    prior_cfg = get_train_preset("tiny").replace(max_steps=1, **fast)
+    prior_run = Trainer(prior_cfg, tmp_path / "data", tmp_path / "prior", device="cpu", note=lambda m: None)
+    prior_run.fit()
+    prior_run.close()
+    with pytest.raises(RoomlightError, match="architecture differs"):
+        Trainer(cfg.replace(init_from=str(tmp_path / "prior")), tmp_path / "data", tmp_path / "third",
+                device="cpu", note=lambda m: None)
+
+
 # ----------------------------------------------------------------------------- fitting methods
 @pytest.fixture(scope="module")
 def tiny_scene(tmp_path_factory):
