@@ -33,7 +33,7 @@ def test_bundled_prior_is_at_least_the_emitter_resolution_and_records_its_traini
 #: Measured (seed 0): the lite prior 51x and 94 %; the 512-latent prior 21x and 72 %. Its samples are
 #: flatter (docs/results.md, "The bundled prior"); its shipping target was the median >= 20x.
 #: VENI+D (latent 513): 16x and 59 %. VENI (latent 513, radiance only): 5.7x and 42 %; most of its
-#: samples are rooms with soft light, a weakness of that prior, recorded in docs/results.md.
+#: samples are rooms with soft light, a weakness of that prior, recorded in docs/model.md.
 SAMPLE_CONTRAST_TARGETS = {
     "prior": (20.0, 0.70),
     "lite": (20.0, 0.75),
