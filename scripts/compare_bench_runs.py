@@ -5,8 +5,6 @@ was run twice on the same scenes, e.g. without and with the white balance. The s
 methods are renamed ``<method><suffix>`` and each is paired with every method of the first run:
 ``METHOD+wb − baseline`` for each metric and material, as in the benchmark's own report (for a photo
 benchmark also the recovered materials and, per inserted object, the compositing scores).
-Given one results folder twice, it pairs one of its methods with the others, e.g. VENI+D against VENI:
-``compare_bench_runs.py R R --suffix " (2)" --method veni-d``.
 
 Run: .venv/bin/python scripts/compare_bench_runs.py BASE_RESULTS OTHER_RESULTS [--suffix +wb]
          [--method prior] [--view eval] [--out FILE.md]

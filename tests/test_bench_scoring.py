@@ -159,6 +159,35 @@ def test_paired_differences_hand_computed(tmp_path):
     assert page.count("Cells: mean per-scene difference") == 1
 
 
+def test_paired_tables_against_another_reference_method(tmp_path):
+    """``reference``: any method's per-scene differences against the others, hand-computed; a
+    method without finished cases is refused with the methods the results do have."""
+    from roomlight.bench.errors import BenchError
+    from roomlight.bench.report import write_report
+
+    _fake_results(tmp_path, [
+        ("r1", "diffuse", "prior", 20.0, 0.1, 1.0), ("r2", "diffuse", "prior", 30.0, 0.3, 3.0),
+        ("r1", "diffuse", "veni", 10.0, 0.5, 2.0), ("r2", "diffuse", "veni", 10.0, 0.7, 1.0),
+        ("r1", "diffuse", "veni-d", 14.0, 0.2, 2.5), ("r2", "diffuse", "veni-d", 11.0, 0.6, 0.5),
+    ])
+    paths = write_report(tmp_path, figures=False, progress=False, reference="veni-d")
+    summary = json.loads(paths["json"].read_text())
+    assert summary["paired_reference"] == "veni-d"
+    paired = summary["paired"]["eval"]
+    assert set(paired) == {"prior", "veni"}
+    vs_veni = paired["veni"]["diffuse"]
+    assert vs_veni["psnr_ldr"]["mean"] == pytest.approx(2.5) and vs_veni["psnr_ldr"]["wins"] == 2  # +4, +1
+    assert vs_veni["rmse_hdr"]["mean"] == pytest.approx(-0.2) and vs_veni["rmse_hdr"]["wins"] == 2
+    assert vs_veni["angular_error"]["mean"] == pytest.approx(0.0) and vs_veni["angular_error"]["wins"] == 1
+    vs_prior = paired["prior"]["diffuse"]["psnr_ldr"]
+    assert vs_prior["mean"] == pytest.approx(-12.5) and vs_prior["wins"] == 0  # -6, -19
+    md = paths["markdown"].read_text()
+    assert "evaluation view: veni-d against each other method" in md and "| veni-d − baseline |" in md
+    assert "veni-d against each other method" in paths["html"].read_text()
+    with pytest.raises(BenchError, match="'venid' to pair the others with; the results have veni, veni-d, prior"):
+        write_report(tmp_path, figures=False, progress=False, reference="venid")
+
+
 def test_bootstrap_interval_matches_the_normal_approximation():
     """For many scenes the percentile bootstrap of a mean approaches mean +- 1.96 s / sqrt(n)
     (s: the population standard deviation, which is what the bootstrap resamples)."""

@@ -138,9 +138,11 @@ def _caption(sid: str) -> str:
             "for every row (bar below; an env map has none, its light is at infinity).")
 
 
-def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
-    """``index.html``: the explanation, both tables, fit times, links to the files and every scene figure."""
+def write_index(out_dir, records: list[dict], figures: dict[str, Path], reference: str = "prior") -> Path:
+    """``index.html``: the explanation, both tables (the paired one: ``reference`` against every other
+    method), fit times, links to the files and every scene figure."""
     from roomlight.bench.paired import paired_differences, paired_markdown
+    from roomlight.bench.report import paired_title
     from roomlight.bench.tables import MATERIAL_ORDER, markdown_table, ordered
 
     out = Path(out_dir)
@@ -153,8 +155,8 @@ def write_index(out_dir, records: list[dict], figures: dict[str, Path]) -> Path:
               "<a href='summary.json'>summary.json</a></p>"),
              *_about(records, settings),
              "<h2>Evaluation view (probe) — paper Table 2</h2>", md_table_to_html(markdown_table(records, "eval")),
-             "<h2>Paired differences: the prior against each baseline (evaluation view)</h2>",
-             md_table_to_html(paired_markdown(paired_differences(records, "prior", "eval"), "prior",
+             f"<h2>Paired differences: {html.escape(paired_title(reference))} (evaluation view)</h2>",
+             md_table_to_html(paired_markdown(paired_differences(records, reference, "eval"), reference,
                                               ordered({r["material"] for r in records}, MATERIAL_ORDER))),
              "<h2>Input view (fitted objects)</h2>", md_table_to_html(markdown_table(records, "input")),
              "<h2>Fit time</h2>", _timing_table(records), "<h2>Scenes</h2>"]

@@ -36,7 +36,8 @@ from roomlight.bench.runner import RESULT
 from roomlight.bench.tables import (MATERIAL_ORDER, METHOD_ORDER, METRIC_LABELS, VIEWS, markdown_table, ordered,
                                     representation, summarize, write_wide_csv)
 
-__all__ = ["collect_results", "collect_failures", "write_tables", "write_report",
+__all__ = ["collect_results", "collect_failures", "write_tables", "write_report", "paired_reference",
+           "paired_title",
            # re-exported from roomlight.bench.tables, where the table layout lives
            "METRIC_LABELS", "METHOD_ORDER", "summarize", "representation", "markdown_table"]
 
@@ -115,8 +116,29 @@ def _timing(records: list[dict]) -> dict[str, dict]:
     return {m: {"mean_fit_seconds": float(np.mean(v)), "cases": len(v)} for m, v in t.items()}
 
 
-def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]:
-    """Write report.md, table.csv, table_input.csv, cases.csv and summary.json; return their paths."""
+def paired_title(reference: str) -> str:
+    """What the paired tables compare, as their headings say it."""
+    return "the prior against each baseline" if reference == "prior" else f"{reference} against each other method"
+
+
+def paired_reference(records: list[dict], reference: str | None) -> str:
+    """The method the paired tables compare with the others: ``reference``, which must have finished
+    cases, or by default the prior (whose tables stay empty in results without it)."""
+    if reference is None:
+        return "prior"
+    methods = ordered({r["method"] for r in records}, METHOD_ORDER)
+    if reference not in methods:
+        raise BenchError(f"no finished case of the method {reference!r} to pair the others with; "
+                         f"the results have {', '.join(methods)}")
+    return reference
+
+
+def write_tables(records: list[dict], out_dir, failures=None, reference: str | None = None) -> dict[str, Path]:
+    """Write report.md, table.csv, table_input.csv, cases.csv and summary.json; return their paths.
+
+    The paired tables hold ``reference - method`` per scene for every other method (see
+    :func:`paired_reference`)."""
+    reference = paired_reference(records, reference)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     failures = failures or []
@@ -133,19 +155,20 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
                "timing": timing, "failed": [f.get("case", "?") for f in failures],
                "outside": {v: outside_cases(records, v) for v in VIEWS},
                "std": "population standard deviation over scenes (ddof = 0)",
-               "paired": {v: paired_differences(records, "prior", v) for v in VIEWS},
-               "paired_note": ("per-scene difference prior - baseline: mean, 95 % percentile-bootstrap "
-                               "interval of the mean, scenes won by the prior")}
+               "paired_reference": reference,
+               "paired": {v: paired_differences(records, reference, v) for v in VIEWS},
+               "paired_note": (f"per-scene difference {reference} - baseline: mean, 95 % percentile-bootstrap "
+                               f"interval of the mean, scenes won by {reference}")}
     paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
     md = ["# Benchmark results", "",
           f"{len(records)} cases, {summary['scenes']} scenes. Cells: mean ± std over scenes (one scene: its value "
           "alone); best in bold.", "",
           "## Evaluation view (probe sphere) — paper Table 2", "", markdown_table(records, "eval"),
-          "## Paired differences, evaluation view: the prior against each baseline", "",
-          paired_markdown(summary["paired"]["eval"], "prior", summary["materials"]),
+          f"## Paired differences, evaluation view: {paired_title(reference)}", "",
+          paired_markdown(summary["paired"]["eval"], reference, summary["materials"]),
           "## Input view (fitted objects) — supplementary fitted-view table", "", markdown_table(records, "input"),
           "## Paired differences, input view", "",
-          paired_markdown(summary["paired"]["input"], "prior", summary["materials"], note=False),
+          paired_markdown(summary["paired"]["input"], reference, summary["materials"], note=False),
           "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
     for m in ordered(timing, METHOD_ORDER):
         md.append(f"| {m} | {timing[m]['mean_fit_seconds']:.1f} | {timing[m]['cases']} |")
@@ -163,14 +186,16 @@ def write_tables(records: list[dict], out_dir, failures=None) -> dict[str, Path]
     return paths
 
 
-def write_report(res_dir, out_dir=None, figures: bool = True, progress: bool = True) -> dict[str, Path]:
-    """Tables, per-scene figures and ``index.html`` of a results folder (see the module docstring)."""
+def write_report(res_dir, out_dir=None, figures: bool = True, progress: bool = True,
+                 reference: str | None = None) -> dict[str, Path]:
+    """Tables, per-scene figures and ``index.html`` of a results folder (see the module docstring);
+    the paired tables compare ``reference`` (default: the prior) with every other method."""
     records = collect_results(res_dir)
     if not records:
         raise BenchError(f"{res_dir}: no finished case (no result.json under {Path(res_dir) / 'cases'})")
     failures = collect_failures(res_dir)
     out = Path(out_dir) if out_dir else Path(res_dir) / "report"
-    paths = write_tables(records, out, failures)
+    paths = write_tables(records, out, failures, reference)
     figs: dict[str, Path] = {}
     if figures:
         from roomlight.bench.figures import scene_figures
@@ -178,6 +203,6 @@ def write_report(res_dir, out_dir=None, figures: bool = True, progress: bool = T
         figs = scene_figures(records, out / "figures", progress=progress)
     from roomlight.bench.page import write_index
 
-    paths["html"] = write_index(out, records, figs)
+    paths["html"] = write_index(out, records, figs, paired_reference(records, reference))
     paths.update({f"figure:{k}": v for k, v in figs.items()})
     return paths

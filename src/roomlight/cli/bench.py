@@ -139,13 +139,17 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Report folder [default: RESULTS/report].")
 @click.option("--no-figures", is_flag=True, help="Tables only (no per-scene figures).")
+@click.option("--reference", default=None, metavar="METHOD",
+              help="The method the paired tables compare with every other, scene by scene, e.g. veni-d "
+                   "[default: prior].")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def report(results, out_dir, no_figures, quiet):
+def report(results, out_dir, no_figures, reference, quiet):
     """Table 2 (method x material x metric, mean ± std) of RESULTS as Markdown, CSV and JSON,
-    a figure per scene, and index.html."""
+    paired per-scene differences of --reference against every other method with bootstrap
+    intervals, a figure per scene, and index.html."""
     from roomlight.bench.report import write_report
 
-    paths = write_report(results, out_dir, figures=not no_figures, progress=not quiet)
+    paths = write_report(results, out_dir, figures=not no_figures, progress=not quiet, reference=reference)
     click.echo(paths["markdown"].read_text())
     click.echo(f"report -> {paths['html']}")
 
