@@ -141,8 +141,7 @@ def _caption(sid: str) -> str:
 def write_index(out_dir, records: list[dict], figures: dict[str, Path], reference: str = "prior") -> Path:
     """``index.html``: the explanation, both tables (the paired one: ``reference`` against every other
     method), fit times, links to the files and every scene figure."""
-    from roomlight.bench.paired import paired_differences, paired_markdown
-    from roomlight.bench.report import paired_title
+    from roomlight.bench.paired import paired_differences, paired_markdown, paired_title
     from roomlight.bench.tables import MATERIAL_ORDER, markdown_table, ordered
 
     out = Path(out_dir)

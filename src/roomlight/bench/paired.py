@@ -20,7 +20,12 @@ from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
 from roomlight.stats import RESAMPLES, VERDICT_MARKS, bootstrap_mean_interval, interval_verdict
 
 # bootstrap_mean_interval stays importable from here, where it was first defined.
-__all__ = ["bootstrap_mean_interval", "paired_differences", "paired_markdown"]
+__all__ = ["bootstrap_mean_interval", "paired_differences", "paired_markdown", "paired_title"]
+
+
+def paired_title(method: str) -> str:
+    """What the paired tables of ``method`` compare, as the reports' headings say it."""
+    return "the prior against each baseline" if method == "prior" else f"{method} against each other method"
 
 
 def paired_differences(records: list[dict], method: str = "prior", view: str = "eval",

@@ -31,13 +31,12 @@ import numpy as np
 
 from roomlight.bench.errors import BenchError
 from roomlight.bench.metrics import METRICS
-from roomlight.bench.paired import paired_differences, paired_markdown
+from roomlight.bench.paired import paired_differences, paired_markdown, paired_title
 from roomlight.bench.runner import RESULT
 from roomlight.bench.tables import (MATERIAL_ORDER, METHOD_ORDER, METRIC_LABELS, VIEWS, markdown_table, ordered,
                                     representation, summarize, write_wide_csv)
 
 __all__ = ["collect_results", "collect_failures", "write_tables", "write_report", "paired_reference",
-           "paired_title",
            # re-exported from roomlight.bench.tables, where the table layout lives
            "METRIC_LABELS", "METHOD_ORDER", "summarize", "representation", "markdown_table"]
 
@@ -114,11 +113,6 @@ def _timing(records: list[dict]) -> dict[str, dict]:
         if r.get("fit_seconds") is not None:
             t.setdefault(r["method"], []).append(float(r["fit_seconds"]))
     return {m: {"mean_fit_seconds": float(np.mean(v)), "cases": len(v)} for m, v in t.items()}
-
-
-def paired_title(reference: str) -> str:
-    """What the paired tables compare, as their headings say it."""
-    return "the prior against each baseline" if reference == "prior" else f"{reference} against each other method"
 
 
 def paired_reference(records: list[dict], reference: str | None) -> str:
