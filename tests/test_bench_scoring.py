@@ -184,7 +184,7 @@ def test_paired_tables_against_another_reference_method(tmp_path):
     md = paths["markdown"].read_text()
     assert "evaluation view: veni-d against each other method" in md and "| veni-d − baseline |" in md
     assert "veni-d against each other method" in paths["html"].read_text()
-    with pytest.raises(BenchError, match="'venid' to pair the others with; the results have veni, veni-d, prior"):
+    with pytest.raises(BenchError, match="'venid' to pair the others with; the results have prior, veni, veni-d"):
         write_report(tmp_path, figures=False, progress=False, reference="venid")
 
 

@@ -519,6 +519,18 @@ def test_runner_resumes_shards_records_failures_and_the_report_pairs_methods(bui
     assert summary["paired"]["materials"]["direct-envmap"]["objects"]["albedo_rmse"]["mean"] == pytest.approx(-0.05)
     assert paths["figure:photo-00000"].is_file() and paths["html"].read_text().count("<figure") == 1
     assert "## Inserted objects" in md and summary["insertion"]["methods"]["prior"]["psnr_ldr"]["n"] == 2
+    # the paired tables against another reference: the same differences with the sign turned
+    other = write_photo_report(res, tmp_path / "vs-envmap", figures=False, progress=False, reference="direct-envmap")
+    flipped = json.loads(other["json"].read_text())
+    assert flipped["paired_reference"] == "direct-envmap" and set(flipped["paired"]["probes"]) == {"prior"}
+    back = flipped["paired"]["probes"]["prior"]["diffuse"]["rmse_hdr"]
+    assert back["mean"] == pytest.approx(-stats["mean"]) and back["wins"] == 0
+    assert flipped["paired"]["materials"]["prior"]["objects"]["albedo_rmse"]["mean"] == pytest.approx(0.05)
+    ins = summary["insertion"]["paired"]["direct-envmap"]["objects"]["psnr_ldr"]["mean"]
+    assert flipped["insertion"]["paired"]["prior"]["objects"]["psnr_ldr"]["mean"] == pytest.approx(-ins)
+    assert "## Paired differences on the probes: direct-envmap against each other method" in other["markdown"].read_text()
+    with pytest.raises(RoomlightError, match="'veni-d' to pair the others with; the results have direct-envmap, oracle, prior"):
+        write_photo_report(res, tmp_path / "vs-none", figures=False, progress=False, reference="veni-d")
 
 
 def run_cli(*args):

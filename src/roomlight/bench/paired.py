@@ -16,11 +16,25 @@ import math
 
 import numpy as np
 
+from roomlight.bench.errors import BenchError
 from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
 from roomlight.stats import RESAMPLES, VERDICT_MARKS, bootstrap_mean_interval, interval_verdict
 
 # bootstrap_mean_interval stays importable from here, where it was first defined.
-__all__ = ["bootstrap_mean_interval", "paired_differences", "paired_markdown", "paired_title"]
+__all__ = ["bootstrap_mean_interval", "paired_differences", "paired_markdown", "paired_reference", "paired_title"]
+
+
+def paired_reference(records: list[dict], reference: str | None) -> str:
+    """The method a report's paired tables compare with the others: ``reference``, which must have
+    finished cases among ``records``, or by default the prior (whose tables stay empty in results
+    without it)."""
+    if reference is None:
+        return "prior"
+    methods = sorted({r["method"] for r in records})
+    if reference not in methods:
+        raise BenchError(f"no finished case of the method {reference!r} to pair the others with; "
+                         f"the results have {', '.join(methods)}")
+    return reference
 
 
 def paired_title(method: str) -> str:

@@ -31,12 +31,12 @@ import numpy as np
 
 from roomlight.bench.errors import BenchError
 from roomlight.bench.metrics import METRICS
-from roomlight.bench.paired import paired_differences, paired_markdown, paired_title
+from roomlight.bench.paired import paired_differences, paired_markdown, paired_reference, paired_title
 from roomlight.bench.runner import RESULT
 from roomlight.bench.tables import (MATERIAL_ORDER, METHOD_ORDER, METRIC_LABELS, VIEWS, markdown_table, ordered,
                                     representation, summarize, write_wide_csv)
 
-__all__ = ["collect_results", "collect_failures", "write_tables", "write_report", "paired_reference",
+__all__ = ["collect_results", "collect_failures", "write_tables", "write_report",
            # re-exported from roomlight.bench.tables, where the table layout lives
            "METRIC_LABELS", "METHOD_ORDER", "summarize", "representation", "markdown_table"]
 
@@ -113,18 +113,6 @@ def _timing(records: list[dict]) -> dict[str, dict]:
         if r.get("fit_seconds") is not None:
             t.setdefault(r["method"], []).append(float(r["fit_seconds"]))
     return {m: {"mean_fit_seconds": float(np.mean(v)), "cases": len(v)} for m, v in t.items()}
-
-
-def paired_reference(records: list[dict], reference: str | None) -> str:
-    """The method the paired tables compare with the others: ``reference``, which must have finished
-    cases, or by default the prior (whose tables stay empty in results without it)."""
-    if reference is None:
-        return "prior"
-    methods = ordered({r["method"] for r in records}, METHOD_ORDER)
-    if reference not in methods:
-        raise BenchError(f"no finished case of the method {reference!r} to pair the others with; "
-                         f"the results have {', '.join(methods)}")
-    return reference
 
 
 def write_tables(records: list[dict], out_dir, failures=None, reference: str | None = None) -> dict[str, Path]:

@@ -127,12 +127,15 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, qu
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Report folder [default: RESULTS/report].")
 @click.option("--no-figures", is_flag=True, help="Tables only (no per-photo figures).")
+@click.option("--reference", default=None, metavar="METHOD",
+              help="The method the paired tables compare with every other, photo by photo, e.g. veni-d "
+                   "[default: prior].")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def report_photos(results, out_dir, no_figures, quiet):
+def report_photos(results, out_dir, no_figures, reference, quiet):
     """The photo benchmark's tables (probes: method x material x metric; recovered materials), paired
     statistics, a figure per photo and index.html, from the RESULTS of run-photos."""
     from roomlight.photobench.report import write_photo_report
 
-    paths = write_photo_report(results, out_dir, figures=not no_figures, progress=not quiet)
+    paths = write_photo_report(results, out_dir, figures=not no_figures, progress=not quiet, reference=reference)
     click.echo(paths["markdown"].read_text())
     click.echo(f"report -> {paths['html']}")

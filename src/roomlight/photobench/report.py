@@ -2,8 +2,8 @@
 
 The probe scores take the synthetic benchmark's Table 2 layout (:mod:`roomlight.bench.tables`):
 one row per method, one column per metric x probe material, mean +- std over photos; and its
-paired statistics (:mod:`roomlight.bench.paired`): per photo, ``prior - baseline``, with a 95 %
-bootstrap interval of the mean and the photos the prior wins. The recovered materials get the
+paired statistics (:mod:`roomlight.bench.paired`): per photo, ``prior - baseline`` (or another
+reference method's), with a 95 % bootstrap interval of the mean and the photos it wins. The recovered materials get the
 same treatment (mean +- std of the per-photo mean error over objects, and paired differences).
 
 Files written to ``OUT`` (default ``RES/report``):
@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.bench.metrics import METRICS
-from roomlight.bench.paired import paired_differences, paired_markdown
+from roomlight.bench.paired import paired_differences, paired_markdown, paired_reference, paired_title
 from roomlight.bench.report import collect_failures
 from roomlight.bench.tables import markdown_table, ordered, summarize, write_wide_csv
 from roomlight.errors import RoomlightError
@@ -218,20 +218,21 @@ def _outside_markdown(outside: dict) -> list[str]:
     return md + [""]
 
 
-def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(), outside=None, insertion=None) -> str:
+def _markdown(results, probes, mats, paired, paired_mat, timing, failures, gap=(), outside=None, insertion=None,
+              reference: str = "prior") -> str:
     photos = len({r["photo"] for r in results})
     md = ["# Photo benchmark results", "",
           f"{len(results)} cases, {photos} photos. Cells: mean ± std over photos (one photo: its value alone); "
           "best in bold (the oracles, references, never count).", "",
           "## Probes at the true positions under each recovered light", "", markdown_table(probes, "eval"),
-          "## Paired differences on the probes: the prior against each baseline", "",
-          paired_markdown(paired, "prior", [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
+          f"## Paired differences on the probes: {paired_title(reference)}", "",
+          paired_markdown(paired, reference, [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
           *_gap_markdown(list(gap), [m for m in PROBE_MATERIALS if any(r["material"] == m for r in probes)]),
           *_outside_markdown(outside or {}),
-          *_insertion_markdown(insertion),
+          *_insertion_markdown(insertion, reference),
           "## Recovered materials (mean error over each photo's objects)", "", materials_table(mats),
           "## Paired differences on the materials", "",
-          paired_markdown(paired_mat, "prior", ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()},
+          paired_markdown(paired_mat, reference, ["objects"], {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()},
                           note=False),
           "## Fit time", "", "| Method | mean fit seconds | cases |", "|---|---:|---:|"]
     for m in ordered(timing, PHOTO_METHOD_ORDER):
@@ -286,7 +287,8 @@ def photo_figure(photo: str, results: list[dict], path: Path) -> Path:
     return path
 
 
-def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures: dict, settings: dict) -> Path:
+def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures: dict, settings: dict,
+           reference: str = "prior") -> Path:
     from roomlight.bench.page import md_table_to_html
 
     methods = ordered({r["method"] for r in results}, PHOTO_METHOD_ORDER)
@@ -308,11 +310,11 @@ def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures
              f"{settings.get('max_depth', '?')}; fit preset {html.escape(str(settings.get('preset', '?')))}; prior "
              f"{html.escape(str(settings.get('model', 'not recorded')))}.</p>",
              "<h2>Probes</h2>", md_table_to_html(markdown_table(probes, "eval")),
-             "<h2>Paired differences on the probes: the prior against each baseline</h2>",
-             md_table_to_html(paired_markdown(paired, "prior", list(PROBE_MATERIALS))),
+             f"<h2>Paired differences on the probes: {html.escape(paired_title(reference))}</h2>",
+             md_table_to_html(paired_markdown(paired, reference, list(PROBE_MATERIALS))),
              "<h2>Recovered materials</h2>", md_table_to_html(materials_table(mats)),
              "<h2>Paired differences on the materials</h2>",
-             md_table_to_html(paired_markdown(paired_mat, "prior", ["objects"],
+             md_table_to_html(paired_markdown(paired_mat, reference, ["objects"],
                                               {k: f"Δ {v}" for k, v in MATERIAL_LABELS.items()}, note=False)),
              "<h2>Fit time</h2>"]
     rows = "".join(f"<tr><td>{html.escape(m)}</td><td>{timing[m]['mean_fit_seconds']:.1f}</td>"
@@ -350,9 +352,9 @@ def insertion_records(results: list[dict]) -> list[dict]:
     return out
 
 
-def insertion_summary(records: list[dict]) -> dict:
-    """Means per method, paired differences against the prior, and whether the 2.5D light's advantage over
-    the prior at infinity grows with the object's distance from the camera."""
+def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
+    """Means per method, paired differences of ``reference`` against the others, and whether the 2.5D
+    light's advantage over the prior at infinity grows with the object's distance from the camera."""
     from roomlight.stats import bootstrap_mean_interval
 
     by: dict[str, dict[str, list[float]]] = {}
@@ -361,7 +363,7 @@ def insertion_summary(records: list[dict]) -> dict:
             by.setdefault(r["method"], {}).setdefault(k, []).append(float(v))
     methods = {m: {k: {"mean": float(np.nanmean(v)), "std": float(np.nanstd(v)), "n": len(v)} for k, v in d.items()}
                for m, d in by.items()}
-    paired = paired_differences(records, "prior", "insert", exclude=(), metrics=tuple(INSERT_METRICS),
+    paired = paired_differences(records, reference, "insert", exclude=(), metrics=tuple(INSERT_METRICS),
                                 higher_is_better=INSERT_METRICS)
     # distance: per object, prior - prior-envmap region PSNR against the distance
     table: dict[str, dict] = {}
@@ -387,7 +389,7 @@ def insertion_summary(records: list[dict]) -> dict:
     return {"methods": methods, "paired": paired, "distance": distance}
 
 
-def _insertion_markdown(summary: dict | None) -> list[str]:
+def _insertion_markdown(summary: dict | None, reference: str = "prior") -> list[str]:
     if not summary or not summary["methods"]:
         return []
     md = ["## Inserted objects (roomlight insert)", "",
@@ -400,7 +402,7 @@ def _insertion_markdown(summary: dict | None) -> list[str]:
         cells = [f"{summary['methods'][m][k]['mean']:.3f} ± {summary['methods'][m][k]['std']:.3f}" if k in ("ssim", "rmse_hdr")
                  else f"{summary['methods'][m][k]['mean']:.2f} ± {summary['methods'][m][k]['std']:.2f}" for k in INSERT_LABELS]
         md.append(f"| {m} | " + " | ".join(cells) + f" | {summary['methods'][m]['psnr_ldr']['n']} |")
-    md += ["", paired_markdown(summary["paired"], "prior", ["objects"], {k: f"Δ {v}" for k, v in INSERT_LABELS.items()},
+    md += ["", paired_markdown(summary["paired"], reference, ["objects"], {k: f"Δ {v}" for k, v in INSERT_LABELS.items()},
                                note=False)]
     d = summary.get("distance")
     if d:
@@ -412,8 +414,11 @@ def _insertion_markdown(summary: dict | None) -> list[str]:
     return md
 
 
-def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bool = True) -> dict[str, Path]:
-    """Write the report of a results folder (module docstring); returns the files by role."""
+def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bool = True,
+                       reference: str | None = None) -> dict[str, Path]:
+    """Write the report of a results folder (module docstring); returns the files by role. The paired
+    tables compare ``reference`` (default: the prior) with every other method; the gap steps and the
+    distance analysis are the prior's own."""
     results = collect_photo_results(res_dir)
     if not results:
         raise RoomlightError(f"{res_dir}: no finished case (no result.json under {Path(res_dir) / 'cases'})")
@@ -429,14 +434,15 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
             settings = {}
     probes = probe_records(results)
     mats = material_records(results)
-    paired = paired_differences(probes, "prior", "eval", exclude=_EXCLUDE)
-    paired_mat = paired_differences(mats, "prior", "materials", exclude=_EXCLUDE, metrics=MATERIAL_METRICS,
+    reference = paired_reference(results, reference)
+    paired = paired_differences(probes, reference, "eval", exclude=_EXCLUDE)
+    paired_mat = paired_differences(mats, reference, "materials", exclude=_EXCLUDE, metrics=MATERIAL_METRICS,
                                     higher_is_better=_LOWER)
     gap = gap_steps(probes)
     outside = outside_counts(results)
     timing = _timing(results)
     inserted = insertion_records(results)
-    ins_summary = insertion_summary(inserted) if inserted else None
+    ins_summary = insertion_summary(inserted, reference) if inserted else None
     paths = {"markdown": out / "report.md", "csv": out / "table.csv", "materials": out / "materials.csv",
              "cases": out / "cases.csv", "json": out / "summary.json"}
     write_wide_csv(paths["csv"], probes, "eval")
@@ -451,13 +457,14 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
                "materials": {m: {k: {"mean": float(np.mean([v[k] for v in vals])),
                                      "std": float(np.std([v[k] for v in vals])), "n": len(vals)}
                                  for k in MATERIAL_METRICS} for m, vals in mat_summary.items()},
+               "paired_reference": reference,
                "paired": {"probes": paired, "materials": paired_mat}, "gap_steps": gap, "probes_outside": outside, "timing": timing,
                "insertion": ins_summary,
                "failed": [f.get("case", "?") for f in failures], "settings": settings,
                "std": "population standard deviation over photos (ddof = 0)"}
     paths["json"].write_text(json.dumps(summary, indent=2, allow_nan=True))
     paths["markdown"].write_text(_markdown(results, probes, mats, paired, paired_mat, timing, failures, gap, outside,
-                                           ins_summary))
+                                           ins_summary, reference))
     figs: dict[str, Path] = {}
     if figures:
         by: dict[str, list[dict]] = {}
@@ -475,6 +482,6 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
                 bar.update()
         if bar is not None:
             bar.close()
-    paths["html"] = _index(out, results, probes, mats, paired, paired_mat, timing, figs, settings)
+    paths["html"] = _index(out, results, probes, mats, paired, paired_mat, timing, figs, settings, reference)
     paths.update({f"figure:{k}": v for k, v in figs.items()})
     return paths
