@@ -3,8 +3,9 @@
 The probe scores take the synthetic benchmark's Table 2 layout (:mod:`roomlight.bench.tables`):
 one row per method, one column per metric x probe material, mean +- std over photos; and its
 paired statistics (:mod:`roomlight.bench.paired`): per photo, ``prior - baseline`` (or another
-reference method's), with a 95 % bootstrap interval of the mean and the photos it wins. The recovered materials get the
-same treatment (mean +- std of the per-photo mean error over objects, and paired differences).
+reference method's), with a 95 % bootstrap interval of the mean and the photos it wins. The
+recovered materials get the same treatment (mean +- std of the per-photo mean error over objects,
+and paired differences).
 
 Files written to ``OUT`` (default ``RES/report``):
 
