@@ -162,6 +162,30 @@ def test_the_recheck_follows_the_load_only_for_a_count_roomlight_chose(monkeypat
         monkeypatch.setenv("OMP_NUM_THREADS", str(before))
 
 
+def test_a_thread_count_given_on_the_command_line_is_not_measured_again(monkeypatch):
+    """``roomlight`` measures a count at start-up and marks it as its own; ``--threads N`` then replaces
+    it, and the mark must go with it, or the re-measurement between phases would change N mid-run."""
+    import torch
+
+    from roomlight import cpu
+    from roomlight.cli.threads import apply_thread_policy, default_threads
+    from roomlight.render import variant
+
+    before = torch.get_num_threads()
+    for name in ("ROOMLIGHT_THREADS", "ROOMLIGHT_THREADS_AUTO", "ROOMLIGHT_DETERMINISTIC"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(cpu, "measured_threads", lambda exclude_self=False: 2)
+    try:
+        default_threads()                       # the program's start: measured, so marked
+        assert os.environ["ROOMLIGHT_THREADS_AUTO"] == "1"
+        assert apply_thread_policy(1) == 1      # --threads 1
+        assert "ROOMLIGHT_THREADS_AUTO" not in os.environ
+        assert variant.recheck_threads() is None and torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
+        monkeypatch.setenv("OMP_NUM_THREADS", str(before))
+
+
 # ----------------------------------------------------------------------------- options
 @pytest.mark.parametrize("args, expected", [
     (["--height", "-5"], "-5 is not in the range 1<=x<=8192"),

@@ -132,6 +132,59 @@ def test_train_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_
     assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
 
 
+# The command exactly as a user types it: ``--threads 1`` on the command line (not the environment, which
+# the program treats differently), validation, the packed cache and the checkpoint interval left at their
+# defaults, so the interrupted run crosses validations, image writing and periodic checkpoints.
+USER_STEPS = 150
+USER_TRAIN = ["--threads", 1, "train", "--config", "tiny", "--batch-size", 4, "--max-steps", USER_STEPS,
+              "--workers", 0, "--seed", 5, "--set", "progress=false"]
+USER_ENV = {k: v for k, v in ENV.items() if k not in ("ROOMLIGHT_THREADS", "OMP_NUM_THREADS")}
+
+
+@pytest.fixture(scope="module")
+def user_toy(tmp_path_factory):
+    root = tmp_path_factory.mktemp("user-toy")
+    write_toy_dataset(root, 24, 16)
+    return root
+
+
+def run_user_train(data: Path, out: Path) -> None:
+    r = subprocess.run([sys.executable, "-m", "roomlight.cli.main", *map(str, USER_TRAIN), "--data", data,
+                        "--out", out], env=USER_ENV, text=True, capture_output=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-3000:]
+
+
+@pytest.mark.slow
+def test_train_with_threads_option_interrupted_at_a_random_step_resumes_bit_identically(user_toy, tmp_path):
+    """SIGINT at a random step past the first validation (the step is drawn from a fresh seed each run and
+    printed, so a failure can be replayed), then the same command: every tensor of the final weights equals
+    an uninterrupted run's, bit for bit."""
+    straight = tmp_path / "straight"
+    run_user_train(user_toy, straight)
+    seed = random.SystemRandom().randrange(1 << 30)
+    stop_at = random.Random(seed).randrange(55, USER_STEPS - 10)
+    run = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "roomlight.cli.main", *map(str, USER_TRAIN), "--data", user_toy,
+                             "--out", run], env=USER_ENV, text=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    t_end = time.monotonic() + 240
+    while max(train_steps(run), default=0) < stop_at:
+        assert proc.poll() is None, f"seed {seed}: finished before step {stop_at}: {proc.stderr.read()[-2000:]}"
+        assert time.monotonic() < t_end, f"seed {seed}: never reached step {stop_at}"
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signal.SIGINT, f"seed {seed}: {err[-2000:]}"
+    stopped = max(train_steps(run))
+    assert stop_at <= stopped < USER_STEPS, f"seed {seed}"
+    run_user_train(user_toy, run)
+    a, b = final_weights(run, USER_STEPS), final_weights(straight, USER_STEPS)
+    assert a.keys() == b.keys()
+    differing = {k: float((a[k] - b[k]).abs().max()) for k in a if not bool((a[k] == b[k]).all())}
+    assert not differing, f"seed {seed} (stopped at step {stopped}): {len(differing)} tensors differ, largest " \
+                          f"{max(differing.values()):.3g}"
+
+
 @pytest.mark.slow
 def test_train_killed_before_its_first_checkpoint_starts_afresh(toy, straight_run, tmp_path):
     run = tmp_path / "run"

@@ -77,6 +77,12 @@ def apply_thread_policy(option: int | None = None) -> int | None:
         return None
     n = thread_count(option)
     os.environ[ENV_THREADS] = os.environ["OMP_NUM_THREADS"] = str(n)
+    if option is not None:
+        # A count the user gives is fixed: drop the mark that the program measured its own count at
+        # start-up, or a long command's re-measurement (recheck_threads) would change it mid-run and,
+        # with it, the order of torch's float reductions (a resumed training run would then differ
+        # from an uninterrupted one).
+        os.environ.pop(ENV_THREADS_AUTO, None)
     if "torch" in sys.modules:  # torch reads OMP_NUM_THREADS only when it loads
         sys.modules["torch"].set_num_threads(n)
     return n
