@@ -34,7 +34,7 @@ LAYERS = [
     ["emitter"],
     ["io"],
     ["geometry"],
-    ["color", "config", "progress", "cluster", "stats", "cpu"],
+    ["color", "config", "progress", "cluster", "stats", "cpu", "methods"],
     ["errors"],
 ]
 

@@ -13,19 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["METHOD_TEXT", "md_table_to_html", "write_index"]
-
-#: One sentence per method, for the report's reader.
-METHOD_TEXT = {
-    "direct-envmap": "an env map (the light at infinity) optimised pixel by pixel with a smoothness term",
-    "direct-sphere": "a panorama on a sphere around the objects (a sphere proxy), optimised pixel by pixel",
-    "direct-al": "a 2.5D area light (radiance and depth) optimised pixel by pixel with a smoothness term",
-    "prior-envmap": "the learned prior's decoding shown as an env map (its depth ignored)",
-    "prior": "the learned prior's latent (and an exposure) optimised; its decoding is a 2.5D area light",
-    "veni": "VENI, a rotation-equivariant env-map prior, its latent (and an exposure) optimised; light at infinity",
-    "veni-d": "VENI+D, VENI with a depth output, its latent optimised; its decoding is a 2.5D area light",
-    "oracle": "not a fit: the ground-truth emitter re-rendered, the noise floor of the metrics",
-}
+__all__ = ["md_table_to_html", "write_index"]
 
 _STYLE = ("body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1400px;padding:0 1em;line-height:1.45}"
           "table{border-collapse:collapse;font-size:13px;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 6px;"
@@ -69,6 +57,14 @@ def _run_settings(out: Path, records: list[dict]) -> dict:
     return {}
 
 
+def _method_text(name: str) -> str:
+    """The registry's sentence about a method, for the report's reader."""
+    from roomlight.methods import method_names
+    from roomlight.methods import method as method_record
+
+    return method_record(name).text if name in method_names() else "a method not described here"
+
+
 def _about(records: list[dict], settings: dict) -> list[str]:
     from roomlight.bench.metrics import LDR_GAMMA
     from roomlight.bench.tables import METHOD_ORDER, kinds_by_method, ordered
@@ -83,7 +79,7 @@ def _about(records: list[dict], settings: dict) -> list[str]:
              "<h3>Methods</h3><dl>"]
     for m in methods:
         parts.append(f"<dt>{html.escape(m)} ({html.escape(kinds.get(m, ''))})</dt>"
-                     f"<dd>{html.escape(METHOD_TEXT.get(m, 'a method not described here'))}</dd>")
+                     f"<dd>{html.escape(_method_text(m))}</dd>")
     parts += ["</dl><h3>Metrics</h3><dl>",
               f"<dt>PSNR LDR ↑</dt><dd>on the masked pixels after clipping to [0, 1] and gamma {LDR_GAMMA:g}, "
               "as an 8-bit recording would show them (dB, higher is better)</dd>",

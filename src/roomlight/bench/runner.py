@@ -285,9 +285,9 @@ def known_methods() -> tuple[str, ...]:
 def default_methods() -> tuple[str, ...]:
     """The methods ``bench run`` fits without ``--methods``: every one but the VENI rows, which are
     asked for by name (``--methods ...,veni,veni-d``) since they load models of their own."""
-    from roomlight.inverse.methods import VENI_METHODS
+    from roomlight.methods import FIT, default_run
 
-    return tuple(m for m in known_methods() if m not in VENI_METHODS)
+    return default_run(FIT)
 
 
 def check_run_file(out: Path, settings: dict, keys) -> None:

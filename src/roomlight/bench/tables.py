@@ -15,13 +15,15 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
+from roomlight.methods import is_reference, method_order
 
 __all__ = ["METRIC_LABELS", "METHOD_ORDER", "MATERIAL_ORDER", "VIEWS", "ordered", "representation", "summarize",
            "kinds_by_method", "markdown_table", "write_wide_csv"]
 
 METRIC_LABELS = {"psnr_ldr": "PSNR LDR ↑", "rmse_hdr": "RMSE HDR ↓", "angular_error": "RGB angular error (°) ↓"}
-#: Row order of the table (the paper's: smoothness baselines, then the priors); others follow.
-METHOD_ORDER = ("direct-envmap", "direct-sphere", "direct-al", "veni", "prior-envmap", "veni-d", "prior", "oracle")
+#: Row order of every table (the paper's: smoothness baselines, then the priors, then the references;
+#: :mod:`roomlight.methods`); names not in it follow.
+METHOD_ORDER = method_order()
 MATERIAL_ORDER = ("diffuse", "matte", "mirror")
 VIEWS = ("eval", "input")
 
@@ -70,7 +72,7 @@ def _fmt(x: float, metric: str) -> str:
 
 def _best(summary: dict, methods, material: str, metric: str) -> str | None:
     vals = [(summary[m][material][metric]["mean"], m) for m in methods
-            if not m.startswith("oracle") and material in summary.get(m, {})]  # oracles are references
+            if not is_reference(m) and material in summary.get(m, {})]  # a reference is never the best
     vals = [(v, m) for v, m in vals if not math.isnan(v)]
     if len(vals) < 2:
         return None

@@ -121,10 +121,12 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
     cfg = fit_config(preset, iterations=iterations, spp=fit_spp, **parse_sets(sets))
     method_list = _csv(methods)
     from roomlight.bench.runner import default_methods
-    from roomlight.inverse.methods import VENI_METHODS, needs_prior
+    from roomlight.methods import needs_prior
+    from roomlight.methods import method as method_record
 
     # the VENI methods load their own models (--set veni_model=..., veni_d_model=...)
-    with_prior = [m for m in (method_list or default_methods()) if needs_prior(m) and m not in VENI_METHODS]
+    with_prior = [m for m in (method_list or default_methods())
+                  if needs_prior(m) and method_record(m).takes_model_option(False)]
     prior = model_name = None
     if with_prior:
         prior, model_name = load_prior(model, f"--methods {','.join(with_prior)}")

@@ -6,7 +6,8 @@ import click
 
 from roomlight.cli.common import default_of, load_prior, parse_sets
 from roomlight.inverse.config import FIT_PRESETS, FitConfig
-from roomlight.inverse.methods import METHODS, VENI_METHODS, needs_prior
+from roomlight.inverse.methods import METHODS
+from roomlight.methods import method as method_record
 
 _FAST = FIT_PRESETS["fast"]
 
@@ -59,7 +60,7 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     spec = load_scene(scene)
     cfg = fit_config(preset, **{**overrides, **parse_sets(sets)})
     prior = None
-    if needs_prior(method) and (method not in VENI_METHODS or model is not None):
+    if method_record(method).takes_model_option(model is not None):
         prior, _ = load_prior(model, f"--method {method}")  # VENI methods: --model, else --set veni_model=...
     result = fit_scene(spec, method, cfg, out_dir=out_dir, model=prior, progress=not quiet)
     click.echo(f"{method}: best iteration {result.best_iteration} (fixed-seed loss {result.best_loss:.4g}) "

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from roomlight.cli.common import FINITE, default_of, load_prior, parse_sets
+from roomlight.methods import method as method_record
 from roomlight.photo.config import PHOTO_PRESETS, PhotoFitConfig
 from roomlight.photo.fitter import PHOTO_METHODS
 
@@ -91,7 +92,7 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     for note in case.notes:
         click.echo(f"note: {note}", err=True)
     prior = None
-    if any(m.startswith("prior") for m in (method, *compare)) or (model is not None and method.startswith("veni")):
+    if any(method_record(m).takes_model_option(model is not None) for m in (method, *compare)):
         prior, _ = load_prior(model, f"--method {method}")
         if view_encoder is not None:
             from roomlight.model.view_encoder import ViewEncoder

@@ -32,15 +32,12 @@ import torch
 from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
 from roomlight.experiments.files import atomic_json, atomic_text
+from roomlight.methods import method as method_record
 
 __all__ = ["CostConfig", "COST_PRESETS", "PAPER_SCHEDULE", "run_cost", "device_description", "median_seconds"]
 
 #: The paper's training schedule: (epochs, panoramas, batch size).
 PAPER_SCHEDULE = (300, 2233, 32)
-METHOD_LABELS = {"prior": ("roomlight prior", "2.5D AL"), "prior-envmap": ("roomlight prior", "env map"),
-                 "direct-al": ("Smoothness", "2.5D AL"), "direct-sphere": ("Smoothness", "sphere proxy"),
-                 "direct-envmap": ("Smoothness", "env map"), "veni": ("VENI", "env map"),
-                 "veni-d": ("VENI+D", "2.5D AL")}
 
 
 @dataclass(frozen=True)
@@ -81,6 +78,11 @@ COST_PRESETS = {
     "paper": CostConfig(train_batch=32, train_repeats=3, decode_repeats=20, fit_image=1000, fit_spp=64,
                         fit_iterations=5),
 }
+
+
+def _label(name: str) -> tuple[str, str]:
+    """(family, representation) of a method for the table's first two columns."""
+    return method_record(name).label
 
 
 def median_seconds(fn, repeats: int, sync=lambda: None, clock=None) -> float:
@@ -303,8 +305,8 @@ def cost_markdown(summary: dict) -> str:
         return f"{wall:{fmt}}" + ("" if cpu is None else f" ({cpu:{fmt}})")
 
     for method, f in summary["fits"].items():
-        label, emitter = METHOD_LABELS.get(method, (method, ""))
-        prior = method.startswith("prior")
+        label, emitter = _label(method)
+        prior = method_record(method).model == "prior"  # the network, training and decode columns are its
         cells = [label, emitter, f"{m['parameters'] / 1e6:.3g}" if prior else "–",
                  both(m["paper_schedule_hours"], m.get("paper_schedule_cpu_hours"), ".1f") if prior else "–",
                  both(m["decode_ms"], m.get("decode_cpu_ms"), ".1f") if prior else "–",

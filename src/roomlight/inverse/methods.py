@@ -1,14 +1,6 @@
-"""The fitting methods by name, and ``fit_scene`` which runs one on a scene description.
-
-=================  ======================================================================
-``prior``          z + log-exposure (+ white balance) through the 2.5D area light (the paper's method)
-``prior-envmap``   the same prior, its radiance shown at infinity (env-map-prior comparison)
-``veni``           z + exposure of VENI, the rotation-equivariant env-map prior (radiance at infinity)
-``veni-d``         z + exposure of VENI+D, the same with depth, through the 2.5D area light
-``direct-al``      free log radiance + log depth, 2.5D area light, smoothness prior
-``direct-sphere``  free log radiance on a sphere proxy enclosing all objects (+20 %)
-``direct-envmap``  free log radiance as an env map
-=================  ======================================================================
+"""The fitting methods of a scene description (``roomlight fit``, ``bench run``) and ``fit_scene``,
+which runs one: what each method is lives in :mod:`roomlight.methods`; this module turns a name into
+the light model it optimises (:func:`make_light`) and the model it fits (:func:`method_model`).
 """
 
 from __future__ import annotations
@@ -18,26 +10,19 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import RoomlightError
+from roomlight.methods import FIT, methods_for, needs_prior
+from roomlight.methods import method as _method
 from roomlight.inverse.config import FitConfig
 from roomlight.inverse.fitter import FitResult, Fitter, mask_window
 from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
 
-__all__ = ["METHODS", "PRIOR_METHODS", "VENI_METHODS", "needs_prior", "method_model", "make_light", "enclosing_sphere_radius", "repulsion_object_ids",
-           "build_fitter", "fit_scene"]
+__all__ = ["METHODS", "PRIOR_METHODS", "needs_prior", "method_model", "make_light", "enclosing_sphere_radius",
+           "repulsion_object_ids", "build_fitter", "fit_scene"]
 
-#: Every method, in the table's order, and whether it fits the latent of a trained prior
-#: (and so needs ``--model``) rather than free per-pixel maps.
-_NEEDS_PRIOR = {"prior": True, "prior-envmap": True, "veni": True, "veni-d": True, "direct-al": False,
-                "direct-sphere": False, "direct-envmap": False}
-#: The methods of the VENI models, and whether the method shows the light at infinity.
-VENI_METHODS = {"veni": True, "veni-d": False}
-METHODS = tuple(_NEEDS_PRIOR)
-PRIOR_METHODS = tuple(m for m, prior in _NEEDS_PRIOR.items() if prior)
-
-
-def needs_prior(method: str) -> bool:
-    """Whether ``method`` needs a trained prior (a PanoVAE); False for unknown names (e.g. the oracle)."""
-    return _NEEDS_PRIOR.get(method, False)
+#: The methods fitted to a scene's view, in table order.
+METHODS = methods_for(FIT, fitted=True)
+#: Those that fit the latent of a trained model (and so need one).
+PRIOR_METHODS = tuple(m for m in METHODS if needs_prior(m))
 
 
 def enclosing_sphere_radius(scene, margin: float = 0.2) -> float:
@@ -48,19 +33,20 @@ def enclosing_sphere_radius(scene, margin: float = 0.2) -> float:
     return r * (1.0 + margin)
 
 
-def method_model(method: str, config: FitConfig, model=None):
+def method_model(name: str, config: FitConfig, model=None):
     """The model a prior method fits: for ``prior`` / ``prior-envmap`` the given one (a PanoVAE); for
     ``veni`` / ``veni-d`` the given one when it is a VENI model of the method's kind (without / with
     depth), else the one ``config.veni_model`` / ``config.veni_d_model`` names (loaded once per process)."""
     from roomlight.model.families import is_veni
 
-    if method in VENI_METHODS:
-        wants_depth = not VENI_METHODS[method]
+    family = _method(name).model
+    if family in ("veni", "veni-d"):
+        wants_depth = family == "veni-d"
         if is_veni(model) and model.has_depth == wants_depth:
             return model
         return _load_named(config.veni_d_model if wants_depth else config.veni_model)
     if is_veni(model):
-        raise RoomlightError(f"method {method!r} fits the panoramic VAE, and the model given is a VENI model "
+        raise RoomlightError(f"method {name!r} fits the panoramic VAE, and the model given is a VENI model "
                              "(use it with --method veni or veni-d)")
     return model
 
@@ -80,20 +66,20 @@ def _load_named(name: str):
     return _LOADED[key]
 
 
-def make_light(method: str, scene, config: FitConfig, model=None) -> LightModel:
+def make_light(name: str, scene, config: FitConfig, model=None) -> LightModel:
     """The light model of a method (``model``: the prior, needed by the prior methods; see :func:`method_model`)."""
-    if method not in METHODS:
-        raise RoomlightError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    if needs_prior(method):
-        model = method_model(method, config, model)
+    if name not in METHODS:
+        raise RoomlightError(f"unknown method {name!r}; choose one of {', '.join(METHODS)}")
+    m = _method(name)
+    if m.needs_prior:
+        model = method_model(name, config, model)
         if model is None:
-            raise RoomlightError(f"method {method!r} needs a trained prior: pass --model RUN_OR_CHECKPOINT")
-        envmap = method == "prior-envmap" or VENI_METHODS.get(method, False)
-        return PriorLight(model, envmap=envmap, init_exposure=config.init_exposure,
+            raise RoomlightError(f"method {name!r} needs a trained prior: pass --model RUN_OR_CHECKPOINT")
+        return PriorLight(model, envmap=m.light == "envmap", init_exposure=config.init_exposure,
                           z_prior=config.z_prior, fit_depth_scale=config.fit_depth_scale,
                           white_balance=config.white_balance_weight if config.white_balance else None)
     radius = enclosing_sphere_radius(scene, config.sphere_margin)
-    kind = {"direct-al": "mesh", "direct-sphere": f"sphere:{radius:.6g}", "direct-envmap": "envmap"}[method]
+    kind = f"sphere:{radius:.6g}" if m.light == "sphere" else m.light
     return DirectLight(kind, config.direct_resolution, init_radiance=config.init_exposure, init_depth=radius,
                        smooth_radiance=config.smooth_radiance, smooth_depth=config.smooth_depth)
 

@@ -27,6 +27,8 @@ import torch
 from roomlight.errors import RoomlightError
 from roomlight.inverse.fitter import FitResult, Fitter, mask_window
 from roomlight.inverse.lights import DirectLight, LightModel, PriorLight
+from roomlight.methods import PHOTO, methods_for
+from roomlight.methods import method as method_record
 from roomlight.photo.config import PhotoFitConfig
 from roomlight.photo.frustum import FrustumTarget, frustum_terms
 from roomlight.photo.geometry import PhotoGeometry, SceneTransform, build_geometry, level_transform
@@ -34,10 +36,10 @@ from roomlight.photo.materials import ObjectMaterials
 
 __all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
 
-#: The methods a photograph can be fitted with: the 2.5D prior and the two env-map baselines.
-#: The methods that fit a latent, and how their light is shown: as the 2.5D area light or at infinity.
-LATENT_METHODS = {"prior": "mesh", "prior-envmap": "envmap", "veni": "envmap", "veni-d": "mesh"}
-PHOTO_METHODS = (*LATENT_METHODS, "direct-envmap")
+#: The methods a photograph can be fitted with (:mod:`roomlight.methods`): the priors' latents, each
+#: shown as a 2.5D area light or at infinity, and the free env map; the start variants of ``prior``
+#: are ``fit-photo --init``.
+PHOTO_METHODS = tuple(m for m in methods_for(PHOTO, fitted=True) if method_record(m).init is None)
 #: The resumable state of a fit in progress, inside the output folder.
 STATE_FILE = ".fit-state.safetensors"
 
@@ -174,13 +176,16 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
 
     base = level_transform(case)
     obs_room_dirs = base.directions(geometry.frustum.rays)
-    if method in LATENT_METHODS:
+    if method not in PHOTO_METHODS:
+        raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_METHODS)}")
+    record = method_record(method)
+    if record.source == "latent":
         from roomlight.inverse.methods import method_model
 
         model = method_model(method, config, model)
         if model is None:
             raise RoomlightError(f"method {method!r} needs a trained prior (--model)")
-        as_mesh = LATENT_METHODS[method] == "mesh"
+        as_mesh = record.light == "mesh"
         z0, start = start_latent(config.init, model, case, config)
         light = PriorLight(model, envmap=not as_mesh, init_exposure=1.0, z_prior=config.z_prior,
                            white_balance=config.white_balance_weight if config.white_balance else None)
@@ -211,16 +216,15 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
                 light.c.copy_(torch.as_tensor(c0, dtype=light.c.dtype))
             info["white_balance"] = [round(float(v), 6) for v in np.exp(c0)]
         return light, transform, info
-    if method == "direct-envmap":
-        from roomlight.color import log_average_np
+    # free maps (the photo's only one is an env map: without depth nothing places them in the room)
+    from roomlight.color import log_average_np
 
-        obs = geometry.frustum.radiance
-        keep = obs.max(-1) < config.tau
-        level = log_average_np(obs[keep]) if keep.any() else config.init_exposure
-        light = DirectLight("envmap", config.direct_resolution, init_radiance=float(level),
-                            smooth_radiance=config.smooth_radiance, smooth_depth=config.smooth_depth)
-        return light, base, {"initial_radiance": float(level)}
-    raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_METHODS)}")
+    obs = geometry.frustum.radiance
+    keep = obs.max(-1) < config.tau
+    level = log_average_np(obs[keep]) if keep.any() else config.init_exposure
+    light = DirectLight(record.light, config.direct_resolution, init_radiance=float(level),
+                        smooth_radiance=config.smooth_radiance, smooth_depth=config.smooth_depth)
+    return light, base, {"initial_radiance": float(level)}
 
 
 def _state_tag(method: str, case, light: LightModel) -> dict:

@@ -17,16 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import RoomlightError
+from roomlight.methods import PHOTO, methods_for
+from roomlight.methods import method as method_record
 
-__all__ = ["FIT_PHOTO_METHODS", "START_VARIANTS", "PHOTO_FIT_METHODS", "fit_photo_case"]
+__all__ = ["PHOTO_FIT_METHODS", "fit_photo_case"]
 
-#: The methods of ``roomlight fit-photo``.
-FIT_PHOTO_METHODS = ("prior", "prior-envmap", "veni", "veni-d", "direct-envmap")
-#: ``prior`` with a fixed start (``fit-photo --init``): the rows that split the photo fit's gap.
-#: (``prior`` itself starts as fit-photo does by default: from the view encoder when the prior has one.)
-START_VARIANTS = {"prior-view": "view", "prior-samples": "samples", "prior-zero": "zero"}
-#: Every method name the benchmark can fit.
-PHOTO_FIT_METHODS = FIT_PHOTO_METHODS + tuple(START_VARIANTS)
+#: Every method name the benchmark can fit: those of ``roomlight fit-photo`` and the variants of ``prior``
+#: with a fixed start (``fit-photo --init``), the rows that split the photo fit's gap. (``prior`` itself
+#: starts as fit-photo does by default: from the view encoder when the prior has one.)
+PHOTO_FIT_METHODS = methods_for(PHOTO, fitted=True)
 
 
 def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, progress: bool = False,
@@ -55,8 +54,9 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
         raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_FIT_METHODS)}")
     t0 = time.perf_counter()
     overrides = dict(overrides or {})
-    if method in START_VARIANTS:
-        method, overrides["init"] = "prior", START_VARIANTS[method]
+    record = method_record(method)
+    if record.init is not None:
+        method, overrides["init"] = record.fitted_as, record.init
     config = config_mod.photo_config(preset, **overrides)
     case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
     out = Path(out_dir)

@@ -31,6 +31,7 @@ from roomlight.bench.paired import paired_differences, paired_markdown, paired_r
 from roomlight.bench.report import collect_failures
 from roomlight.bench.tables import markdown_table, ordered, summarize, write_wide_csv
 from roomlight.errors import RoomlightError
+from roomlight.methods import method_order
 from roomlight.photobench.objects import PROBE_MATERIALS
 from roomlight.photobench.runner import ORACLES, REFERENCES, RESULT
 from roomlight.photobench.scoring import MATERIAL_METRICS
@@ -38,9 +39,8 @@ from roomlight.photobench.scoring import MATERIAL_METRICS
 __all__ = ["collect_photo_results", "probe_records", "material_records", "materials_table", "write_photo_report",
            "PHOTO_METHOD_ORDER"]
 
-#: Row order: the baselines, the prior, then the references.
-PHOTO_METHOD_ORDER = ("naive-paste", "direct-envmap", "veni", "prior-envmap", "veni-d", "prior-samples", "prior-zero", "prior-view",
-                      "prior", "prior-ceiling", "oracle-envmap", "oracle")
+#: Row order: the baselines, the prior, then the references (:mod:`roomlight.methods`).
+PHOTO_METHOD_ORDER = method_order()
 #: The steps from the oracle light down to the photo fit: (method, the reference it is compared with).
 GAP_STEPS = (("prior-ceiling", "oracle", "the prior's capacity: its best latent for the whole room vs the room"),
              ("prior-samples", "prior-ceiling", "the fit from the paper's start vs the prior's ceiling"),

@@ -40,7 +40,9 @@ import numpy as np
 
 from roomlight.bench.runner import RunSummary, check_run_file, record_failure, write_json
 from roomlight.errors import RoomlightError
-from roomlight.photobench.adapter import FIT_PHOTO_METHODS, PHOTO_FIT_METHODS, fit_photo_case
+from roomlight.methods import PHOTO, default_run, methods_for
+from roomlight.methods import method as method_record
+from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.photobench.ceiling import CEILING, prior_ceiling_light
 from roomlight.photobench.insertion import NAIVE
 from roomlight.photobench.builder import read_photo_manifest
@@ -51,13 +53,14 @@ from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_
 __all__ = ["ORACLES", "REFERENCES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE", "PhotoCase",
            "list_photo_cases", "run_photo_case", "run_photo_benchmark"]
 
-#: Pseudo-methods: the photo's oracle light as a 2.5D light, or shown at infinity.
-ORACLES = {"oracle": "mesh", "oracle-envmap": "envmap"}
-#: References that fit nothing from the photograph: the oracles and the prior's ceiling
-#: (:mod:`roomlight.photobench.ceiling`). Their lights live in the oracle's frame.
-REFERENCES = tuple(ORACLES) + (CEILING, NAIVE)
+#: Pseudo-methods: the photo's true light as a 2.5D light, or shown at infinity (by its light's kind).
+ORACLES = {m: method_record(m).light for m in methods_for(PHOTO, fitted=False) if method_record(m).source == "truth"}
+#: References that fit nothing from the photograph: the oracles, the prior's ceiling
+#: (:mod:`roomlight.photobench.ceiling`) and the naive paste. Their lights live in the oracle's frame.
+REFERENCES = methods_for(PHOTO, fitted=False)
 KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
-DEFAULT_METHODS = tuple(m for m in FIT_PHOTO_METHODS if not m.startswith("veni"))  # VENI rows: by name
+#: Without ``--methods``: the paper's method and the env-map baselines (VENI rows: by name).
+DEFAULT_METHODS = default_run(PHOTO)
 #: Samples per pixel of the scoring renders.
 DEFAULT_EVAL_SPP = 256
 RESULT = "result.json"
