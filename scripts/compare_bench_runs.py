@@ -45,7 +45,7 @@ def main(argv=None) -> None:
     ap.add_argument("--view", default="eval", help="synthetic benchmark view: eval (the probe) or input")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    from roomlight.bench.paired import paired_differences, paired_markdown
+    from roomlight.evaluate.paired import paired_differences, paired_markdown
     from roomlight.errors import RoomlightError
 
     try:

@@ -32,7 +32,7 @@ def _read_rgb(path: Path) -> np.ndarray:
 
 def brightness_table(results: Path, methods: list[str]) -> dict:
     """{method: {"ratio": [recovered/true per photo], "fitted": {material: [psnr]}, "rescaled": {...}}}."""
-    from roomlight.bench.metrics import score_view
+    from roomlight.evaluate.metrics import score_view
     from roomlight.photobench.scoring import load_truth
 
     out = {m: {"photos": [], "ratio": [], "fitted": {k: [] for k in MATERIALS},

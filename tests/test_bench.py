@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.bench.errors import BenchError
+from roomlight.evaluate.errors import BenchError
 from roomlight.bench.recording import record_ldr
 from roomlight.errors import RoomlightError
 from roomlight.examples import example_room

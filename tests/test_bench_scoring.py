@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import angular_error_deg, psnr_ldr, rmse_hdr, score_view
+from roomlight.evaluate.errors import BenchError
+from roomlight.evaluate.metrics import angular_error_deg, psnr_ldr, rmse_hdr, score_view
 from roomlight.bench.recording import exposure_for, record_ldr, saturated_fraction
 from roomlight.errors import RoomlightError, ShapeError
 
@@ -162,7 +162,7 @@ def test_paired_differences_hand_computed(tmp_path):
 def test_paired_tables_against_another_reference_method(tmp_path):
     """``reference``: any method's per-scene differences against the others, hand-computed; a
     method without finished cases is refused with the methods the results do have."""
-    from roomlight.bench.errors import BenchError
+    from roomlight.evaluate.errors import BenchError
     from roomlight.bench.report import write_report
 
     _fake_results(tmp_path, [

@@ -26,6 +26,7 @@ LAYERS = [
     ["export"],
     ["insert"],
     ["eval", "bench", "synth", "prepare"],
+    ["evaluate"],
     ["photo"],
     ["inverse", "data"],
     ["scene", "fit", "model", "examples"],

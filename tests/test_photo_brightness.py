@@ -50,7 +50,7 @@ def run(tmp_path, monkeypatch):
 
 
 def test_the_brightness_ratio_and_the_rescaled_scores(run):
-    from roomlight.bench.metrics import score_view
+    from roomlight.evaluate.metrics import score_view
 
     res, truths = run
     table = _script().brightness_table(res, ["dim", "off"])

@@ -272,7 +272,7 @@ def test_photo_depth_and_masks_agree_with_the_objects_meshes(built):
 
 @pytest.mark.mitsuba
 def test_truth_probes_sit_on_surfaces_fill_their_masks_and_reproduce(built):
-    from roomlight.bench.metrics import psnr_ldr
+    from roomlight.evaluate.metrics import psnr_ldr
     from roomlight.photobench import case as fmt
     from roomlight.photobench.builder import photo_seeds, render_probe_truth
     from roomlight.photobench.roomscene import RoomScenes

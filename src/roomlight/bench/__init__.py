@@ -4,7 +4,7 @@
 - :mod:`~roomlight.bench.recording`  the camera: exposure rule and 8-bit recording
 - :mod:`~roomlight.bench.rendering`  renders at high spp (in passes) and object masks
 - :mod:`~roomlight.bench.builder`    ``roomlight bench make``: scene folders + manifest
-- :mod:`~roomlight.bench.metrics`    PSNR (LDR), RMSE (HDR), RGB angular error over masks
+- :mod:`~roomlight.evaluate.metrics`    PSNR (LDR), RMSE (HDR), RGB angular error over masks
 - :mod:`~roomlight.bench.runner`     ``roomlight bench run``: fit, re-render, score (resumable, sharded)
 - :mod:`~roomlight.bench.report`     ``roomlight bench report``: Table 2 as Markdown / CSV / JSON
 - :mod:`~roomlight.bench.figures`    per-scene figures and index.html
@@ -20,8 +20,8 @@ from roomlight.bench.builder import (
            make_benchmark,
            read_manifest,
 )
-from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import (
+from roomlight.evaluate.errors import BenchError
+from roomlight.evaluate.metrics import (
            METRICS,
            angular_error_deg,
            psnr_ldr,

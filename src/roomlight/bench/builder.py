@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from roomlight.bench.errors import BenchError
+from roomlight.evaluate.errors import BenchError
 from roomlight.config import StrictConfig
 from roomlight.bench.placement import (
     STRATA,

@@ -83,7 +83,7 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from roomlight.bench.tables import representation
+    from roomlight.evaluate.tables import representation
     from roomlight.io import colorize_depth, read_panorama
     from roomlight.scene.build import load_view_target
     from roomlight.scene.build import load_scene
@@ -155,7 +155,7 @@ def scene_figure(scene_path, records: list[dict], path) -> Path:
 
 def scene_figures(records: list[dict], out_dir, progress: bool = True) -> dict[str, Path]:
     """One figure per scene of the results (see :func:`scene_figure`); returns {scene id: path}."""
-    from roomlight.bench.tables import METHOD_ORDER
+    from roomlight.evaluate.tables import METHOD_ORDER
 
     by_scene: dict[str, list[dict]] = {}
     for r in records:

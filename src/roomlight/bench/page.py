@@ -13,35 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["md_table_to_html", "write_index"]
+from roomlight.evaluate.page import PAGE_STYLE, md_table_to_html
 
-_STYLE = ("body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1400px;padding:0 1em;line-height:1.45}"
-          "table{border-collapse:collapse;font-size:13px;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 6px;"
-          "text-align:center}th{background:#f3f3f3}img{max-width:100%}figure{margin:1.5em 0}"
-          "figcaption{font-size:14px;color:#333;max-width:70em}dt{font-weight:600}dd{margin:0 0 .4em 1.5em}"
-          ".note{color:#555;font-size:13px}")
-
-
-def md_table_to_html(md: str) -> str:
-    """A Markdown pipe table (and the text lines around it) as HTML."""
-    lines = md.splitlines()
-    rows = [ln for ln in lines if ln.startswith("|")]
-    text = [ln for ln in lines if ln.strip() and not ln.startswith("|")]
-    if len(rows) < 2:
-        return "".join(f"<p>{html.escape(t.strip('_'))}</p>" for t in text)
-    out = ["<table>"]
-    for i, ln in enumerate(rows):
-        if i == 1:
-            continue
-        cells = [c.strip() for c in ln.strip("|").split("|")]
-        tag = "th" if i == 0 else "td"
-        out.append("<tr>" + "".join(
-            f"<{tag}>" + (f"<b>{html.escape(c[2:-2])}</b>" if c.startswith("**") else html.escape(c)) + f"</{tag}>"
-            for c in cells) + "</tr>")
-    out.append("</table>")
-    out += [f"<p class='note'>{html.escape(t)}</p>" for t in text]
-    return "\n".join(out)
-
+__all__ = ["write_index"]
 
 def _run_settings(out: Path, records: list[dict]) -> dict:
     """``run.json`` of the results folder the report was made from (empty when not found)."""
@@ -66,8 +40,8 @@ def _method_text(name: str) -> str:
 
 
 def _about(records: list[dict], settings: dict) -> list[str]:
-    from roomlight.bench.metrics import LDR_GAMMA
-    from roomlight.bench.tables import METHOD_ORDER, kinds_by_method, ordered
+    from roomlight.evaluate.metrics import LDR_GAMMA
+    from roomlight.evaluate.tables import METHOD_ORDER, kinds_by_method, ordered
 
     methods = ordered({r["method"] for r in records}, METHOD_ORDER)
     kinds = kinds_by_method(records)
@@ -110,7 +84,7 @@ def _about(records: list[dict], settings: dict) -> list[str]:
 
 
 def _timing_table(records: list[dict]) -> str:
-    from roomlight.bench.tables import METHOD_ORDER, ordered
+    from roomlight.evaluate.tables import METHOD_ORDER, ordered
 
     t: dict[str, list[float]] = {}
     for r in records:
@@ -137,13 +111,13 @@ def _caption(sid: str) -> str:
 def write_index(out_dir, records: list[dict], figures: dict[str, Path], reference: str = "prior") -> Path:
     """``index.html``: the explanation, both tables (the paired one: ``reference`` against every other
     method), fit times, links to the files and every scene figure."""
-    from roomlight.bench.paired import paired_differences, paired_markdown, paired_title
-    from roomlight.bench.tables import MATERIAL_ORDER, markdown_table, ordered
+    from roomlight.evaluate.paired import paired_differences, paired_markdown, paired_title
+    from roomlight.evaluate.tables import MATERIAL_ORDER, markdown_table, ordered
 
     out = Path(out_dir)
     settings = _run_settings(out, records)
     parts = ["<!doctype html><html lang='en'><head><meta charset='utf-8'><title>roomlight benchmark</title>",
-             f"<style>{_STYLE}</style></head><body>", "<h1>roomlight synthetic benchmark</h1>",
+             f"<style>{PAGE_STYLE}</style></head><body>", "<h1>roomlight synthetic benchmark</h1>",
              (f"<p>{len(records)} cases, {len({r['scene'] for r in records})} scenes. Files: "
               "<a href='report.md'>report.md</a> · <a href='table.csv'>table.csv</a> · "
               "<a href='table_input.csv'>table_input.csv</a> · <a href='cases.csv'>cases.csv</a> · "

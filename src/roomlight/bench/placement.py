@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 
-from roomlight.bench.errors import BenchError
+from roomlight.evaluate.errors import BenchError
 
 __all__ = ["PlacementError", "PlacementConfig", "ScreenBox", "PlacedObject", "EmitterProbe", "sample_boxes",
            "box_planes", "relative_radius", "cone_directions", "max_inside_distance", "random_rotation",

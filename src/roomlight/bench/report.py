@@ -16,7 +16,7 @@ Files written to ``OUT`` (default ``RES/report``):
   environment map)
 - ``summary.json``  ``{"views": {view: {method: {material: {metric: {mean, std, n}}}}},
   "paired": {view: {baseline: {material: {metric: {mean, ci95, wins, n}}}}}, ...}`` (paired:
-  per-scene differences prior - baseline, :mod:`roomlight.bench.paired`; "outside": {view:
+  per-scene differences prior - baseline, :mod:`roomlight.evaluate.paired`; "outside": {view:
   [{case, share, psnr_ldr}]}, the cases with a share above 0)
 - ``figures/*.png`` and ``index.html`` (see :mod:`roomlight.bench.figures`)
 """
@@ -29,57 +29,31 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import METRICS
-from roomlight.bench.paired import paired_differences, paired_markdown, paired_reference, paired_title
-from roomlight.bench.runner import RESULT
-from roomlight.bench.tables import (MATERIAL_ORDER, METHOD_ORDER, METRIC_LABELS, VIEWS, markdown_table, ordered,
+from roomlight.evaluate.errors import BenchError
+from roomlight.evaluate.metrics import METRICS
+from roomlight.evaluate.paired import paired_differences, paired_markdown, paired_reference, paired_title
+from roomlight.evaluate.records import RUN_FILE, collect_failures, read_case_records
+from roomlight.evaluate.tables import (MATERIAL_ORDER, METHOD_ORDER, METRIC_LABELS, VIEWS, markdown_table, ordered,
                                     representation, summarize, write_wide_csv)
 
 __all__ = ["collect_results", "collect_failures", "write_tables", "write_report",
-           # re-exported from roomlight.bench.tables, where the table layout lives
+           # re-exported from roomlight.evaluate.tables, where the table layout lives
            "METRIC_LABELS", "METHOD_ORDER", "summarize", "representation", "markdown_table"]
 
 
 def collect_results(res_dir) -> list[dict]:
-    """Every ``result.json`` under ``RES/cases`` (sorted by scene, then method)."""
-    root = Path(res_dir) / "cases"
-    if not root.is_dir():
-        raise BenchError(f"{res_dir}: no results (expected {root}; run `roomlight bench run` first)")
+    """Every case record under ``RES/cases`` (sorted by scene, then method), with its ``scene_path``."""
     bench = None
-    run_file = Path(res_dir) / "run.json"
+    run_file = Path(res_dir) / RUN_FILE
     if run_file.is_file():
         try:
             bench = json.loads(run_file.read_text()).get("bench")
         except ValueError:
             bench = None
-    out = []
-    for f in sorted(root.rglob(RESULT)):
-        if f.parent.name == "fit":
-            continue
-        try:
-            rec = json.loads(f.read_text())
-        except ValueError as exc:
-            raise BenchError(f"{f}: not valid JSON: {exc}") from None
-        if not all(k in rec for k in ("scene", "method", "material", "metrics")):
-            continue
-        rec["_dir"] = str(f.parent)
+    out = read_case_records(res_dir, ("scene", "method", "material", "metrics"), "roomlight bench run")
+    for rec in out:
         if not rec.get("scene_path") and bench:
             rec["scene_path"] = str(Path(bench) / rec["scene"] / "scene.json")
-        out.append(rec)
-    return out
-
-
-def collect_failures(res_dir) -> list[dict]:
-    """Every ``error.json`` of a case without a result."""
-    root = Path(res_dir) / "cases"
-    out = []
-    for f in sorted(root.rglob("error.json")) if root.is_dir() else []:
-        if not (f.parent / RESULT).is_file():
-            try:
-                out.append(json.loads(f.read_text()))
-            except ValueError:
-                out.append({"case": str(f.parent), "error": "unreadable error.json"})
     return out
 
 

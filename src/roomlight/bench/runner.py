@@ -6,7 +6,7 @@ For each case (scene x method), in manifest order:
 2. the input and evaluation views are re-rendered under the recovered emitter at ``eval_spp``
    (seeds differ from the ground truth's, so the two renders have independent noise);
 3. both are scored against the ground-truth HDR renders over the views' masks
-   (:mod:`roomlight.bench.metrics`).
+   (:mod:`roomlight.evaluate.metrics`).
 
 Layout of ``RES``::
 
@@ -22,122 +22,58 @@ Layout of ``RES``::
 The pseudo-method ``oracle`` (not a fit) returns the ground-truth emitter itself: its scores are
 the Monte-Carlo noise floor of the metrics at ``eval_spp`` against the ground truth's ``spp``.
 
-Runs resume: a case with a ``result.json`` is skipped. ``shard=(i, n)`` takes cases
-``i, i + n, i + 2n, ...`` of the full list, so ``n`` processes (or machines sharing ``RES``)
-split the work without overlap.
+Running, resuming (a case with a ``result.json`` is skipped), sharding, failures and ``--scheduler``
+are the harness's (:mod:`roomlight.evaluate.runner`), the same for every benchmark kind.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import time
-import traceback
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
-import numpy as np
 import torch
 
 from roomlight.bench.builder import read_manifest
-from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import score_view
+from roomlight.evaluate.errors import BenchError
+from roomlight.evaluate.records import RESULT, RUN_FILE, check_run_file, json_default, record_failure, write_json
 from roomlight.bench.rendering import render_view
+from roomlight.evaluate.metrics import score_view
+from roomlight.evaluate.runner import Case, RunSummary, parse_shard, run_cases, shard_cases
+from roomlight.methods import check_methods
 
-__all__ = ["Case", "RunSummary", "EVAL_SEEDS", "parse_shard", "list_cases", "run_case", "run_benchmark",
-           "known_methods", "oracle_fit", "check_run_file", "record_failure", "write_json", "ORACLE", "RESULT", "RUN_FILE"]
+__all__ = ["SceneCase", "EVAL_SEEDS", "list_cases", "run_case", "run_benchmark", "known_methods", "oracle_fit",
+           "ORACLE", "DEFAULT_EVAL_SPP",
+           # the harness's, re-exported for the commands and scripts that import them from here
+           "RunSummary", "parse_shard", "check_run_file", "record_failure", "write_json", "RESULT", "RUN_FILE"]
 
 #: Samples per pixel of the scoring re-renders (the paper uses 4096).
 DEFAULT_EVAL_SPP = 256
 
-RESULT = "result.json"
 #: Pseudo-method: the ground-truth emitter, re-rendered (the metrics' noise floor).
 ORACLE = "oracle"
-RUN_FILE = "run.json"
 #: Seeds of the re-renders under recovered emitters (the ground truth used 0 and 1 << 20).
 EVAL_SEEDS = {"input": 7_000_001, "eval": 7_000_001 + (1 << 20)}
 VIEWS = ("input", "eval")
 
 
 @dataclass(frozen=True)
-class Case:
-    """One (scene, method) pair."""
+class SceneCase(Case):
+    """One (scene, method) pair: ``item`` is ``<panorama>/<material>``, ``source`` its scene.json."""
 
-    scene_id: str        #: ``<panorama>/<material>``
-    scene_path: Path     #: its scene.json
-    panorama: str
-    material: str
-    method: str
-
-    def directory(self, out: Path) -> Path:
-        return Path(out) / "cases" / self.scene_id / self.method
+    panorama: str = ""
+    material: str = ""
 
 
-@dataclass
-class RunSummary:
-    """What one call of a benchmark run did (:func:`run_benchmark`, the photo benchmark's run):
-    the names of the cases finished now, skipped as already finished, and failed (name -> error)."""
-
-    done: list[str] = field(default_factory=list)
-    skipped: list[str] = field(default_factory=list)
-    failed: dict[str, str] = field(default_factory=dict)
-
-
-def parse_shard(text: str | tuple | None) -> tuple[int, int]:
-    """``"i/n"`` (0 <= i < n) -> (i, n); None -> (0, 1)."""
-    if text is None:
-        return 0, 1
-    if isinstance(text, tuple):
-        i, n = text
-    else:
-        try:
-            a, b = str(text).split("/")
-            i, n = int(a), int(b)
-        except ValueError:
-            raise BenchError(f"--shard: expected i/n such as 0/4, got {text!r}") from None
-    if not (n >= 1 and 0 <= i < n):
-        raise BenchError(f"--shard: need 0 <= i < n, got {i}/{n}")
-    return i, n
-
-
-def list_cases(bench_dir, methods, shard=(0, 1)) -> list[Case]:
+def list_cases(bench_dir, methods, shard=(0, 1)) -> list[SceneCase]:
     """Every (scene, method) case of the benchmark, in manifest x method order, then sharded."""
     bench = Path(bench_dir)
     manifest = read_manifest(bench)
-    cases = []
-    for s in manifest["scenes"]:
-        for m in methods:
-            cases.append(Case(s["id"], bench / s["scene"], s["panorama"], s["material"], m))
-    i, n = shard
-    return cases[i::n]
-
-
-def write_json(path: Path, data) -> None:
-    """Write ``data`` as indented JSON through a temporary file, so a reader never sees half of it."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=_json_default))
-    os.replace(tmp, path)
-
-
-def record_failure(case_dir: Path, name: str, exc: BaseException) -> str:
-    """Write the failed case ``name``'s ``error.json`` (message, type, traceback) into ``case_dir``
-    and return the one-line summary a run prints; call it inside the ``except`` block.
-
-    A later run retries the case: only ``result.json`` marks a case as done."""
-    case_dir.mkdir(parents=True, exist_ok=True)
-    write_json(case_dir / "error.json", {"case": name, "error": str(exc), "type": type(exc).__name__,
-                                         "traceback": traceback.format_exc()})
-    return f"{type(exc).__name__}: {exc}"
-
-
-def _json_default(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+    cases = [SceneCase(s["id"], m, bench / s["scene"], s["panorama"], s["material"])
+             for s in manifest["scenes"] for m in methods]
+    return shard_cases(cases, shard)
 
 
 def emitter_depth(result) -> torch.Tensor | None:
@@ -192,7 +128,7 @@ def _write_render(path: Path, img: torch.Tensor) -> None:
     write_exr(path, {"R": a[..., 0], "G": a[..., 1], "B": a[..., 2]}, half=False)
 
 
-def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: int = 256,
+def run_case(case: SceneCase, out_dir, fit, fit_config=None, model=None, eval_spp: int = 256,
              max_depth: int = 4, progress: bool = True) -> dict:
     """Fit, re-render and score one case; writes its directory and returns the result record.
 
@@ -206,7 +142,7 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
 
     cdir = case.directory(out_dir)
     cdir.mkdir(parents=True, exist_ok=True)
-    scene = load_scene(case.scene_path)
+    scene = load_scene(case.source)
     t0 = time.perf_counter()
     if case.method == ORACLE:
         result = oracle_fit(scene)
@@ -226,7 +162,7 @@ def run_case(case: Case, out_dir, fit, fit_config=None, model=None, eval_spp: in
         metrics[view] = score_view(img, gt, mask)
     history = list(getattr(result, "history", []) or [])
     record = {
-        "scene": case.scene_id, "scene_path": str(Path(case.scene_path).resolve()), "panorama": case.panorama,
+        "scene": case.item, "scene_path": str(Path(case.source).resolve()), "panorama": case.panorama,
         "material": case.material, "method": case.method,
         "emitter_kind": str(result.emitter_kind), "metrics": metrics,
         "fit_seconds": float(getattr(result, "seconds", 0.0) or fit_seconds),
@@ -290,39 +226,6 @@ def default_methods() -> tuple[str, ...]:
     return default_run(FIT)
 
 
-def check_run_file(out: Path, settings: dict, keys) -> None:
-    """Refuse a results folder whose ``run.json`` was written with other values of ``keys`` (the
-    settings that change what a case computes), then record ``settings`` there."""
-    f = out / RUN_FILE
-    if f.is_file():
-        try:
-            old = json.loads(f.read_text())
-        except ValueError:
-            old = None
-        if isinstance(old, dict):
-            for key in keys:
-                if key in old and old[key] != settings[key]:
-                    raise BenchError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
-                                     f"now {settings[key]!r}); use another --out, or delete it to start over")
-    write_json(f, settings)
-
-
-def _attempt(c: Case, out: Path, fit, fit_config, model, eval_spp: int, max_depth: int,
-             progress: bool) -> tuple[str, str | None]:
-    """Run one case; a failure is written to its ``error.json`` and returned as text."""
-    from roomlight.render.variant import recheck_threads
-
-    name = f"{c.scene_id}/{c.method}"
-    recheck_threads()  # between cases the load may have changed (only for a thread count roomlight chose)
-    try:
-        run_case(c, out, fit, fit_config, model, eval_spp, max_depth, progress)
-        return name, None
-    except KeyboardInterrupt:
-        raise
-    except Exception as exc:  # one failed case must not stop a long run
-        return name, record_failure(c.directory(out), name, exc)
-
-
 def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None, eval_spp: int = DEFAULT_EVAL_SPP,
                   shard=(0, 1), max_depth: int = 4, progress: bool = True, fit=None, scheduler=None,
                   model_name: str | None = None) -> RunSummary:
@@ -343,11 +246,7 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
     """
     if fit is None:
         fit = _default_fit()
-        allowed = known_methods()
-        bad = [m for m in (methods or ()) if m not in allowed + (ORACLE,)]
-        if bad:
-            raise BenchError(f"--methods: unknown method(s) {', '.join(bad)}; choose from "
-                             f"{', '.join(allowed + (ORACLE,))}")
+        check_methods(methods or (), known_methods() + (ORACLE,))
     methods = tuple(methods) if methods else default_methods()
     bench = Path(bench_dir).resolve()
     out = Path(out_dir)
@@ -356,43 +255,13 @@ def run_benchmark(bench_dir, out_dir, methods=None, fit_config=None, model=None,
     cfg_dict = fit_config.to_dict() if hasattr(fit_config, "to_dict") else (
         dict(vars(fit_config)) if fit_config is not None else None)
     settings = {"bench": str(bench), "methods": list(methods),
-                "fit_config": json.loads(json.dumps(cfg_dict, default=_json_default)),
+                "fit_config": json.loads(json.dumps(cfg_dict, default=json_default)),
                 "eval_spp": eval_spp, "max_depth": max_depth}
     if model_name is not None:
         settings["model"] = str(model_name)
     check_run_file(out, settings, ("fit_config", "eval_spp", "max_depth"))
     cases = list_cases(bench, methods, shard)
-    summary = RunSummary()
-    todo = []
-    for c in cases:
-        if (c.directory(out) / RESULT).is_file():
-            summary.skipped.append(f"{c.scene_id}/{c.method}")
-        else:
-            todo.append(c)
-    bar = None
-    if progress and todo:
-        from roomlight.progress import progress_bar
-
-        bar = progress_bar(total=len(todo), desc="bench run", unit="case")
-    from functools import partial
-
-    from roomlight.cluster import map_unordered
-
     # on a cluster the fits print no bars of their own (this process shows the cases)
-    one = partial(_attempt, out=out, fit=fit, fit_config=fit_config, model=model, eval_spp=eval_spp,
+    one = partial(run_case, out_dir=out, fit=fit, fit_config=fit_config, model=model, eval_spp=eval_spp,
                   max_depth=max_depth, progress=progress and scheduler is None)
-    try:
-        for name, error in map_unordered(one, todo, scheduler):
-            if error is None:
-                summary.done.append(name)
-            else:
-                summary.failed[name] = error
-                if bar is not None:
-                    bar.write(f"bench run: {name} failed: {error}")
-            if bar is not None:
-                bar.set_postfix_str(name)
-                bar.update()
-    finally:
-        if bar is not None:
-            bar.close()
-    return summary
+    return run_cases(cases, out, one, desc="bench run", progress=progress, scheduler=scheduler)

@@ -19,7 +19,7 @@ def _csv(value):
 
 
 def _shard(text):
-    from roomlight.bench.runner import parse_shard
+    from roomlight.evaluate.runner import parse_shard
 
     return parse_shard(text)
 
@@ -95,9 +95,11 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, inserts, dep
 @click.option("--eval-spp", type=int, default=DEFAULT_EVAL_SPP, show_default=True,
               help="Samples per pixel of the probe renders under the recovered lights.")
 @click.option("--shard", default=None, metavar="I/N", help="Run only cases I, I+N, I+2N, ... (0 <= I < N).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Run the cases on the workers of this Dask scheduler (tcp://host:8786); needs roomlight[dask].")
 @sets_option("fit-photo setting")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, quiet):
+def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, scheduler, sets, quiet):
     """Fit every photo of BENCH with each method and score the probes under the recovered light.
 
     Photos built with inserted objects (make-photos --inserts, default 2) also get them composited under
@@ -109,16 +111,21 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, sets, qu
     """
     from roomlight.photobench.runner import run_photo_benchmark
 
-    method_list = _csv(methods) or DEFAULT_METHODS
-    bad = [m for m in method_list if m not in KNOWN_METHODS]
-    if bad:
-        raise click.UsageError(f"--methods: unknown method(s) {', '.join(bad)}; choose from {', '.join(KNOWN_METHODS)}")
-    with_prior = [m for m in method_list if m.startswith("prior")]
+    from roomlight.errors import RoomlightError
+    from roomlight.methods import check_methods
+    from roomlight.methods import method as method_record
+
+    try:
+        method_list = check_methods(_csv(methods) or DEFAULT_METHODS, KNOWN_METHODS)
+    except RoomlightError as exc:
+        raise click.UsageError(str(exc)) from None
+    with_prior = [m for m in method_list if method_record(m).model == "prior"]  # VENI loads its own models
     prior = model_name = None
     if with_prior:
         prior, model_name = load_prior(model, f"--methods {','.join(with_prior)}")
     summary = run_photo_benchmark(bench, out_dir, method_list, preset, prior, eval_spp, _shard(shard),
-                                  progress=not quiet, overrides=parse_sets(sets), model_name=model_name)
+                                  progress=not quiet, overrides=parse_sets(sets), model_name=model_name,
+                                  scheduler=scheduler)
     echo_run_summary("run-photos", summary, out_dir)
 
 

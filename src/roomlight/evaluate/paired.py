@@ -16,8 +16,8 @@ import math
 
 import numpy as np
 
-from roomlight.bench.errors import BenchError
-from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
+from roomlight.evaluate.errors import BenchError
+from roomlight.evaluate.metrics import HIGHER_IS_BETTER, METRICS
 from roomlight.stats import RESAMPLES, VERDICT_MARKS, bootstrap_mean_interval, interval_verdict
 
 # bootstrap_mean_interval stays importable from here, where it was first defined.

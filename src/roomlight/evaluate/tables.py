@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.metrics import HIGHER_IS_BETTER, METRICS
+from roomlight.evaluate.metrics import HIGHER_IS_BETTER, METRICS
 from roomlight.methods import is_reference, method_order
 
 __all__ = ["METRIC_LABELS", "METHOD_ORDER", "MATERIAL_ORDER", "VIEWS", "ordered", "representation", "summarize",

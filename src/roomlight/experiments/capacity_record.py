@@ -24,7 +24,7 @@ MATERIAL_LABELS = {"diffuse": "Diffuse", "matte": "Matte silver", "mirror": "Mir
 
 
 def _rmse(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:
-    from roomlight.bench.metrics import rmse_hdr
+    from roomlight.evaluate.metrics import rmse_hdr
 
     return rmse_hdr(a, b, mask)
 

@@ -139,7 +139,7 @@ def _labels(coverage: np.ndarray) -> np.ndarray:
 
 def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
     """Build photo ``index`` into ``out_dir/photo-<index>`` (see the module docstring); returns its record."""
-    from roomlight.bench.metrics import score_view
+    from roomlight.evaluate.metrics import score_view
     from roomlight.bench.recording import record_ldr, saturated_fraction
     from roomlight.color import log_average_np
     from roomlight.io import write_panorama

@@ -109,7 +109,7 @@ def insertion_scores(composite: np.ndarray, truth: np.ndarray, labels: np.ndarra
     """One record per new object: region and object scores (module docstring) and its distance (m)."""
     import torch
 
-    from roomlight.bench.metrics import LDR_GAMMA, score_view
+    from roomlight.evaluate.metrics import LDR_GAMMA, score_view
     from roomlight.eval.metrics import ssim
 
     def ldr(x: np.ndarray) -> torch.Tensor:  # the benchmark's LDR: clipped, gamma 2.2, no exposure change

@@ -1,8 +1,8 @@
 """``roomlight bench report-photos``: the photo benchmark's tables, paired statistics, figures and page.
 
-The probe scores take the synthetic benchmark's Table 2 layout (:mod:`roomlight.bench.tables`):
+The probe scores take the synthetic benchmark's Table 2 layout (:mod:`roomlight.evaluate.tables`):
 one row per method, one column per metric x probe material, mean +- std over photos; and its
-paired statistics (:mod:`roomlight.bench.paired`): per photo, ``prior - baseline`` (or another
+paired statistics (:mod:`roomlight.evaluate.paired`): per photo, ``prior - baseline`` (or another
 reference method's), with a 95 % bootstrap interval of the mean and the photos it wins. The
 recovered materials get the same treatment (mean +- std of the per-photo mean error over objects,
 and paired differences).
@@ -26,14 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.metrics import METRICS
-from roomlight.bench.paired import paired_differences, paired_markdown, paired_reference, paired_title
-from roomlight.bench.report import collect_failures
-from roomlight.bench.tables import markdown_table, ordered, summarize, write_wide_csv
+from roomlight.evaluate.metrics import METRICS
+from roomlight.evaluate.page import PAGE_STYLE, md_table_to_html
+from roomlight.evaluate.paired import paired_differences, paired_markdown, paired_reference, paired_title
+from roomlight.evaluate.records import collect_failures, read_case_records
+from roomlight.evaluate.tables import markdown_table, ordered, summarize, write_wide_csv
 from roomlight.errors import RoomlightError
 from roomlight.methods import method_order
 from roomlight.photobench.objects import PROBE_MATERIALS
-from roomlight.photobench.runner import ORACLES, REFERENCES, RESULT
+from roomlight.photobench.runner import ORACLES, REFERENCES
 from roomlight.photobench.scoring import MATERIAL_METRICS
 
 __all__ = ["collect_photo_results", "probe_records", "material_records", "materials_table", "write_photo_report",
@@ -54,27 +55,11 @@ MATERIAL_LABELS = {"albedo_rmse": "albedo RMSE ↓", "roughness_error": "roughne
                    "metallic_error": "metallic error ↓"}
 _EXCLUDE = REFERENCES
 _LOWER = {m: False for m in MATERIAL_METRICS}
-_STYLE = ("body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1400px;padding:0 1em;line-height:1.45}"
-          "table{border-collapse:collapse;font-size:13px;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 6px;"
-          "text-align:center}th{background:#f3f3f3}img{max-width:100%}figure{margin:1.5em 0}"
-          "figcaption{font-size:14px;color:#333;max-width:70em}.note{color:#555;font-size:13px}")
 
 
 def collect_photo_results(res_dir) -> list[dict]:
-    """Every ``result.json`` under ``RES/cases`` (sorted by photo, then method)."""
-    root = Path(res_dir) / "cases"
-    if not root.is_dir():
-        raise RoomlightError(f"{res_dir}: no results (expected {root}; run `roomlight bench run-photos` first)")
-    out = []
-    for f in sorted(root.glob(f"*/*/{RESULT}")):
-        try:
-            rec = json.loads(f.read_text())
-        except ValueError as exc:
-            raise RoomlightError(f"{f}: not valid JSON: {exc}") from None
-        if all(k in rec for k in ("photo", "method", "probes")):
-            rec["_dir"] = str(f.parent)
-            out.append(rec)
-    return out
+    """Every case record under ``RES/cases`` (sorted by photo, then method)."""
+    return read_case_records(res_dir, ("photo", "method", "probes"), "roomlight bench run-photos")
 
 
 def probe_records(results: list[dict]) -> list[dict]:
@@ -290,11 +275,10 @@ def photo_figure(photo: str, results: list[dict], path: Path) -> Path:
 
 def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures: dict, settings: dict,
            reference: str = "prior") -> Path:
-    from roomlight.bench.page import md_table_to_html
 
     methods = ordered({r["method"] for r in results}, PHOTO_METHOD_ORDER)
     parts = ["<!doctype html><html lang='en'><head><meta charset='utf-8'><title>roomlight photo benchmark</title>",
-             f"<style>{_STYLE}</style></head><body>", "<h1>roomlight photo benchmark</h1>",
+             f"<style>{PAGE_STYLE}</style></head><body>", "<h1>roomlight photo benchmark</h1>",
              (f"<p>{len(results)} cases, {len({r['photo'] for r in results})} photos, methods: "
               f"{html.escape(', '.join(methods))}. Files: <a href='report.md'>report.md</a> · "
               "<a href='table.csv'>table.csv</a> · <a href='materials.csv'>materials.csv</a> · "

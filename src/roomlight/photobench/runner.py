@@ -26,21 +26,22 @@ Layout of ``RES``::
         fit/              the fit's own files (panorama.exr, emitter/, materials.json, result.json, ...)
         error.json        instead of result.json when the case failed (retried on the next run)
 
-Runs resume (a case with a ``result.json`` is skipped); ``shard=(i, n)`` takes cases
-``i, i + n, ...`` of the full list.
+Running, resuming (a case with a ``result.json`` is skipped), sharding, failures and ``--scheduler``
+are the harness's (:mod:`roomlight.evaluate.runner`), as for ``bench run``.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from roomlight.bench.runner import RunSummary, check_run_file, record_failure, write_json
 from roomlight.errors import RoomlightError
-from roomlight.methods import PHOTO, default_run, methods_for
+from roomlight.evaluate.records import RESULT, RUN_FILE, check_run_file, write_json
+from roomlight.evaluate.runner import Case, RunSummary, run_cases, shard_cases
+from roomlight.methods import PHOTO, check_methods, default_run, methods_for
 from roomlight.methods import method as method_record
 from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.photobench.ceiling import CEILING, prior_ceiling_light
@@ -50,7 +51,7 @@ from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_
                                           probes_outside,
                                           score_light)
 
-__all__ = ["ORACLES", "REFERENCES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE", "PhotoCase",
+__all__ = ["ORACLES", "REFERENCES", "KNOWN_METHODS", "DEFAULT_METHODS", "DEFAULT_EVAL_SPP", "RESULT", "RUN_FILE",
            "list_photo_cases", "run_photo_case", "run_photo_benchmark"]
 
 #: Pseudo-methods: the photo's true light as a 2.5D light, or shown at infinity (by its light's kind).
@@ -63,29 +64,14 @@ KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
 DEFAULT_METHODS = default_run(PHOTO)
 #: Samples per pixel of the scoring renders.
 DEFAULT_EVAL_SPP = 256
-RESULT = "result.json"
-RUN_FILE = "run.json"
 
 
-@dataclass(frozen=True)
-class PhotoCase:
-    """One (photo, method) pair."""
-
-    photo: str
-    case_dir: Path
-    method: str
-
-    def directory(self, out) -> Path:
-        return Path(out) / "cases" / self.photo / self.method
-
-
-def list_photo_cases(bench_dir, methods, shard=(0, 1)) -> list[PhotoCase]:
-    """Every (photo, method) case, in manifest x method order, then sharded."""
+def list_photo_cases(bench_dir, methods, shard=(0, 1)) -> list[Case]:
+    """Every (photo, method) case (``item``: the photo id; ``source``: its case folder), in manifest x
+    method order, then sharded."""
     bench = Path(bench_dir)
     manifest = read_photo_manifest(bench)
-    cases = [PhotoCase(p["id"], bench / p["case"], m) for p in manifest["photos"] for m in methods]
-    i, n = shard
-    return cases[i::n]
+    return shard_cases([Case(p["id"], m, bench / p["case"]) for p in manifest["photos"] for m in methods], shard)
 
 
 def _recovered(fit: dict) -> RecoveredLight:
@@ -97,7 +83,7 @@ def _recovered(fit: dict) -> RecoveredLight:
                           str(fit["emitter_kind"]), np.asarray(fit["light_from_camera"], np.float64))
 
 
-def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, eval_spp: int = DEFAULT_EVAL_SPP,
+def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_spp: int = DEFAULT_EVAL_SPP,
                    fit=None, progress: bool = False, overrides: dict | None = None) -> dict:
     """Fit (or take the oracle), score and write one case; returns its ``result.json`` record.
 
@@ -110,22 +96,22 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
     fit = fit or fit_photo_case
     cdir = case.directory(out_dir)
     cdir.mkdir(parents=True, exist_ok=True)
-    truth = load_truth(case.case_dir)
+    truth = load_truth(case.source)
     t0 = time.perf_counter()
     materials = fitted_materials = None
     if case.method in ORACLES:
-        light = oracle_light(case.case_dir, ORACLES[case.method], truth)
+        light = oracle_light(case.source, ORACLES[case.method], truth)
         fit_seconds = 0.0
     elif case.method == CEILING:
-        light = prior_ceiling_light(case.case_dir, model, truth)
+        light = prior_ceiling_light(case.source, model, truth)
         fit_seconds = time.perf_counter() - t0
     elif case.method == NAIVE:
         from roomlight.photobench.insertion import naive_light
 
-        light = naive_light(case.case_dir)
+        light = naive_light(case.source)
         fit_seconds = 0.0
     else:
-        out = fit(case.case_dir, case.method, preset, cdir / "fit", model=model, progress=progress,
+        out = fit(case.source, case.method, preset, cdir / "fit", model=model, progress=progress,
                   overrides=overrides)
         fitted_materials = out.get("materials") or {}
         light = _recovered(out)
@@ -141,7 +127,7 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
         write_rgb_exr(cdir / f"probes_{m}.exr", img)
     outside = probes_outside(truth, light, given_depth=case.method not in REFERENCES)
     insertion = _insertion(case, light, truth, fitted_materials, preset, overrides, eval_spp, cdir)
-    record = {"photo": case.photo, "case_dir": str(Path(case.case_dir).resolve()), "method": case.method,
+    record = {"photo": case.item, "case_dir": str(Path(case.source).resolve()), "method": case.method,
               "emitter_kind": light.kind, "probes": scores, "materials": materials,
               "probes_outside": outside, "insertion": insertion,
               "depth_factors": truth.depth_factors, "fit_seconds": fit_seconds, "wall_seconds": wall,
@@ -155,18 +141,18 @@ def run_photo_case(case: PhotoCase, out_dir, preset: str = "paper", model=None, 
     return record
 
 
-def _insertion(case: PhotoCase, light, truth, fitted_materials, preset, overrides, spp: int, cdir: Path):
+def _insertion(case: Case, light, truth, fitted_materials, preset, overrides, spp: int, cdir: Path):
     """Per inserted object, the composite's scores (None for a photo built without inserted objects)."""
     from roomlight.photobench import case as fmt
     from roomlight.photobench.insertion import composite_for_light, insertion_scores, read_insert_truth
 
-    ins = read_insert_truth(Path(case.case_dir) / fmt.TRUTH)
+    ins = read_insert_truth(Path(case.source) / fmt.TRUTH)
     if ins is None:
         return None
     image, labels, objects = ins
     # a reference fits no materials: the local scene's objects get their true ones
     materials = fitted_materials if fitted_materials else {k: m.to_dict() for k, m in truth.materials.items()}
-    composite = composite_for_light(case.case_dir, light, materials, objects, truth.camera, preset, overrides, spp,
+    composite = composite_for_light(case.source, light, materials, objects, truth.camera, preset, overrides, spp,
                                     local_scene=case.method != NAIVE)
     fmt.write_rgb_exr(cdir / "insert.exr", composite)
     return insertion_scores(composite, image, labels, objects, truth.camera.matrix)
@@ -174,7 +160,7 @@ def _insertion(case: PhotoCase, light, truth, fitted_materials, preset, override
 
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
                         eval_spp: int = DEFAULT_EVAL_SPP, shard=(0, 1), progress: bool = True, fit=None,
-                        model_name: str | None = None, overrides: dict | None = None) -> RunSummary:
+                        model_name: str | None = None, overrides: dict | None = None, scheduler=None) -> RunSummary:
     """Run (a shard of) the photo benchmark; see the module docstring.
 
     Args:
@@ -184,11 +170,9 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
             model: the prior for the prior methods.
         fit: the fitting function (default: :func:`~roomlight.photobench.adapter.fit_photo_case`).
         model_name: where the prior came from, recorded in ``run.json``.
+        scheduler: a Dask scheduler address (or cluster): run the cases on its workers, as ``bench run``.
     """
-    methods = tuple(methods) if methods else DEFAULT_METHODS
-    bad = [m for m in methods if m not in KNOWN_METHODS]
-    if bad:
-        raise RoomlightError(f"--methods: unknown method(s) {', '.join(bad)}; choose from {', '.join(KNOWN_METHODS)}")
+    methods = check_methods(methods, KNOWN_METHODS) if methods else DEFAULT_METHODS
     if eval_spp < 1:
         raise RoomlightError(f"--eval-spp must be at least 1, got {eval_spp}")
     bench = Path(bench_dir).resolve()
@@ -200,35 +184,6 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
     if model_name is not None:
         settings["model"] = str(model_name)
     check_run_file(out, settings, ("preset", "overrides", "eval_spp", "max_depth"))
-    summary = RunSummary()
-    todo = []
-    for c in cases:
-        (summary.skipped if (c.directory(out) / RESULT).is_file() else todo).append(c)
-    summary.skipped = [f"{c.photo}/{c.method}" for c in summary.skipped]
-    bar = None
-    if progress and todo:
-        from roomlight.progress import progress_bar
-
-        bar = progress_bar(total=len(todo), desc="run-photos", unit="case")
-    try:
-        from roomlight.render.variant import recheck_threads
-
-        for c in todo:
-            name = f"{c.photo}/{c.method}"
-            recheck_threads(note=bar.write if bar is not None else None)  # the load may have changed
-            try:
-                run_photo_case(c, out, preset, model, eval_spp, fit, progress=False, overrides=overrides)
-                summary.done.append(name)
-            except KeyboardInterrupt:
-                raise
-            except Exception as exc:  # one failed case must not stop a long run
-                summary.failed[name] = record_failure(c.directory(out), name, exc)
-                if bar is not None:
-                    bar.write(f"run-photos: {name} failed: {exc}")
-            if bar is not None:
-                bar.set_postfix_str(name)
-                bar.update()
-    finally:
-        if bar is not None:
-            bar.close()
-    return summary
+    one = partial(run_photo_case, out_dir=out, preset=preset, model=model, eval_spp=eval_spp, fit=fit,
+                  progress=False, overrides=overrides)
+    return run_cases(cases, out, one, desc="run-photos", progress=progress, scheduler=scheduler)

@@ -28,7 +28,7 @@ geometry and use factor 1.
 Only the probe window (``window`` of ``truth/probes.json``) is rendered. Each probe material's
 render is compared with ``truth/probes_<material>.exr`` over the probe pixels
 (``truth/probe_mask.png``) with the synthetic benchmark's metrics
-(:func:`roomlight.bench.metrics.score_view`: PSNR LDR, RMSE HDR, RGB angular error), overall and
+(:func:`roomlight.evaluate.metrics.score_view`: PSNR LDR, RMSE HDR, RGB angular error), overall and
 per probe. Recovered materials are compared per object with the true ones
 (:func:`material_errors`).
 
@@ -232,7 +232,7 @@ def score_light(truth: PhotoTruth, light: RecoveredLight, spp: int = 64, seed: i
     ``renders``, when given, receives each material's (H, W, 3) render; ``given_depth``: see
     :func:`render_probes`.
     """
-    from roomlight.bench.metrics import score_view
+    from roomlight.evaluate.metrics import score_view
 
     out = {}
     for k, m in enumerate(PROBE_MATERIALS):
