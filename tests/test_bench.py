@@ -274,7 +274,7 @@ def test_runner_scores_cases_and_resumes(bench, results):
     s2 = run_benchmark(bench[0], res, ["oracle", "x2", "broken"], eval_spp=16, progress=False, fit=_stub_fit(again))
     assert len(s2.skipped) == 4 and not s2.done and len(s2.failed) == 2
     assert sorted(again) == [("diffuse", "broken"), ("mirror", "broken")]
-    with pytest.raises(BenchError, match="run with other settings \\(eval_spp: 16, now 32\\)"):
+    with pytest.raises(BenchError, match="other settings \\(eval_spp: 16 -> 32\\)"):
         run_benchmark(bench[0], res, ["oracle"], eval_spp=32, progress=False, fit=_stub_fit([]))
 
 

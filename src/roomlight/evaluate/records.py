@@ -22,8 +22,8 @@ import numpy as np
 
 from roomlight.evaluate.errors import BenchError
 
-__all__ = ["RESULT", "RUN_FILE", "json_default", "write_json", "record_failure", "check_run_file", "read_case_records",
-           "collect_failures"]
+__all__ = ["RESULT", "RUN_FILE", "json_default", "write_json", "record_failure", "check_settings", "check_run_file",
+           "read_case_records", "collect_failures"]
 
 RESULT = "result.json"
 RUN_FILE = "run.json"
@@ -62,21 +62,36 @@ def record_failure(case_dir: Path, name: str, exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-def check_run_file(out: Path, settings: dict, keys) -> None:
-    """Refuse a results folder whose ``run.json`` was written with other values of ``keys`` (the
-    settings that change what a case computes), then record ``settings`` there."""
-    f = Path(out) / RUN_FILE
+def _differences(old, new, prefix: str = "") -> list[str]:
+    """``name: old -> new`` for every differing value, nested settings named by their path."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        return [d for k in sorted(set(old) | set(new), key=str)
+                for d in _differences(old.get(k), new.get(k), f"{prefix}{k}.")]
+    return [] if old == new else [f"{prefix.rstrip('.')}: {old!r} -> {new!r}"]
+
+
+def check_settings(path, settings: dict, keys=None) -> None:
+    """Refuse an output folder whose settings file ``path`` was written with other values of ``keys``
+    (the settings that change what its items compute; every key when None), naming each difference;
+    then record ``settings`` there. Every resumable command (benchmarks, experiments) goes through here."""
+    f = Path(path)
     if f.is_file():
         try:
             old = json.loads(f.read_text())
         except ValueError:
             old = None
         if isinstance(old, dict):
-            for key in keys:
-                if key in old and old[key] != settings[key]:
-                    raise BenchError(f"{f}: this results folder was run with other settings ({key}: {old[key]!r}, "
-                                     f"now {settings[key]!r}); use another --out, or delete it to start over")
+            names = sorted(set(old) | set(settings)) if keys is None else [k for k in keys if k in old]
+            diffs = [d for k in names for d in _differences(old.get(k), settings.get(k), f"{k}.")]
+            if diffs:
+                raise BenchError(f"{f.parent}: holds results made with other settings ({'; '.join(diffs)}); "
+                                 "use the same settings, another --out, or delete it to start over")
     write_json(f, settings)
+
+
+def check_run_file(out: Path, settings: dict, keys) -> None:
+    """:func:`check_settings` of a results folder's ``run.json``."""
+    check_settings(Path(out) / RUN_FILE, settings, keys)
 
 
 def read_case_records(res_dir, required: tuple[str, ...], command: str) -> list[dict]:

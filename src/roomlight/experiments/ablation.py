@@ -37,6 +37,7 @@ import numpy as np
 
 from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
+from roomlight.evaluate.records import check_settings
 from roomlight.experiments.ablation_rows import ROW_LABELS, ROWS
 from roomlight.experiments.files import atomic_json
 
@@ -112,17 +113,7 @@ def row_train_config(cfg: AblationConfig, row: str, progress: bool = True):
 
 
 def _check_settings(out: Path, cfg: AblationConfig, data: str) -> None:
-    f = out / "settings.json"
-    want = {"config": cfg.to_dict(), "data": data}
-    if f.is_file():
-        old = json.loads(f.read_text())
-        if old != want:
-            keys = sorted(k for k in set(old.get("config", {})) | set(want["config"])
-                          if old.get("config", {}).get(k) != want["config"].get(k))
-            what = ", ".join(keys) + (", data" if old.get("data") != data else "")
-            raise RoomlightError(f"{out} holds an ablation study with other settings ({what}); use the same "
-                                 "settings or another --out")
-    atomic_json(f, want)
+    check_settings(out / "settings.json", {"config": cfg.to_dict(), "data": data})
 
 
 def _prepare_data(out: Path, cfg: AblationConfig, data, note) -> Path:

@@ -56,6 +56,7 @@ import torch
 
 from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
+from roomlight.evaluate.records import check_settings
 from roomlight.experiments.capacity_record import KIND_LABELS, KINDS, RESULT, VIEW_TAGS, score_renders
 from roomlight.experiments.files import atomic_json, atomic_npz
 from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout, sphere_proxy_radius
@@ -343,19 +344,7 @@ def _summary(room) -> dict:
 # --------------------------------------------------------------------------------------------
 
 def _check_settings(out: Path, cfg: CapacityConfig) -> None:
-    f = out / "settings.json"
-    want = cfg.scene_settings()
-    if f.is_file():
-        try:
-            old = json.loads(f.read_text())
-        except ValueError:
-            old = None
-        if isinstance(old, dict) and old != want:
-            diff = ", ".join(f"{k} {old.get(k)!r} -> {want.get(k)!r}" for k in sorted(set(old) | set(want))
-                             if old.get(k) != want.get(k))
-            raise RoomlightError(f"{out} holds rooms measured with other settings ({diff}); "
-                                 "use the same settings or another --out")
-    atomic_json(f, want)
+    check_settings(out / "settings.json", cfg.scene_settings())
 
 
 def run_capacity(out_dir, cfg: CapacityConfig = CapacityConfig(), rooms=None, progress: bool = True,
