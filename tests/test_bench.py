@@ -403,11 +403,12 @@ def test_cli_make_run_report(bench, panos, tmp_path):
 @pytest.mark.mitsuba
 def test_masks_do_not_depend_on_ray_batching(bench, monkeypatch):
     from roomlight.bench import rendering
+    from roomlight.render import raycast
     from roomlight.scene import load_scene
 
     scene = load_scene(bench[0] / "room" / "diffuse" / "scene.json")
     cov, ids = rendering.object_coverage(scene, "input", supersample=2)
-    monkeypatch.setattr(rendering, "MAX_RAYS_PER_CAST", 32 * 2 * 2 * 5)  # five image rows per cast
+    monkeypatch.setattr(raycast, "MAX_RAYS_PER_CAST", 32 * 2 * 2 * 5)  # five image rows per cast
     cov2, ids2 = rendering.object_coverage(scene, "input", supersample=2)
     np.testing.assert_array_equal(cov, cov2)
     np.testing.assert_array_equal(ids, ids2)

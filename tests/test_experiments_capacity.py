@@ -13,7 +13,8 @@ from roomlight.errors import RoomlightError
 from roomlight.experiments.capacity import CapacityConfig, run_capacity
 from roomlight.experiments.capacity_record import KINDS, room_cells, score_renders
 from roomlight.experiments.capacity_report import summarize_capacity
-from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, fibonacci_directions, place_layout
+from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout
+from roomlight.render.raycast import sphere_directions
 
 #: Small enough for a test: 32 x 64 panoramas, 24 x 24 probe images.
 TINY = dict(pano_height=32, pano_spp=16, image_size=24, gt_spp=64, emitter_spp=64)
@@ -99,8 +100,8 @@ def test_clearance_matches_the_distance_to_a_box_room(mi):
     assert not caster.sees([0.5, 1.0, 0.5], [4.5, 1.0, 0.5])  # through the wall x = 4
 
 
-def test_fibonacci_directions_are_unit_and_balanced():
-    d = fibonacci_directions(256)
+def test_sphere_directions_are_unit_and_balanced():
+    d = sphere_directions(256)
     assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
     assert np.abs(d.mean(0)).max() < 0.01
 

@@ -13,43 +13,24 @@ Masks come from casting the view camera's primary rays against the view's object
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import torch
 
-from roomlight.errors import RoomlightError
+from roomlight.render.raycast import MAX_SAMPLES_PER_PASS, render_in_passes, shape_coverage
 
 __all__ = ["MAX_SAMPLES_PER_PASS", "render_passes", "view_emitter_scene", "render_view", "object_coverage"]
 
-#: Paths per Mitsuba launch (pixels x spp); larger renders are split into averaged passes.
-MAX_SAMPLES_PER_PASS = 1 << 24
-#: Primary rays per ray cast of :func:`object_coverage`.
-MAX_RAYS_PER_CAST = 1 << 22
-
 
 def render_passes(escene, spp: int, seed: int = 0, max_samples: int = MAX_SAMPLES_PER_PASS) -> torch.Tensor:
-    """Render an :class:`~roomlight.render.scene.EmitterScene` at ``spp`` in averaged passes.
-
-    Pass ``k`` uses seed ``seed + k``; the passes split ``spp`` as evenly as possible and are
-    weighted by their sample counts, so the result estimates the same image as one launch.
+    """Render an :class:`~roomlight.render.scene.EmitterScene` at ``spp`` in averaged passes
+    (:func:`~roomlight.render.raycast.render_in_passes`).
 
     Returns:
         (H, W, 3) float32 linear radiance.
     """
-    if spp <= 0:
-        raise RoomlightError(f"render: spp must be positive, got {spp}")
     film = escene.scene.sensors()[0].film().crop_size()
-    pixels = int(film[0]) * int(film[1])
-    passes = max(1, math.ceil(spp * pixels / max_samples))
-    passes = min(passes, spp)
-    base, extra = divmod(spp, passes)
-    acc = None
-    for k in range(passes):
-        n = base + (1 if k < extra else 0)
-        img = escene.render(spp=n, seed=seed + k).double() * n
-        acc = img if acc is None else acc + img
-    return (acc / spp).float()
+    return render_in_passes(lambda n, sd: escene.render(spp=n, seed=sd).double(), spp, int(film[0]) * int(film[1]),
+                            seed, max_samples).float()
 
 
 def view_emitter_scene(scene, view, kind, resolution, max_depth: int = 4):
@@ -89,8 +70,6 @@ def object_coverage(scene, view, supersample: int = 4) -> tuple[np.ndarray, np.n
         ids: (h, w) int32, 1 + index (in ``view.objects``) of the object hit by most of the
         pixel's rays, 0 where none is hit.
     """
-    import drjit as dr
-
     from roomlight.render.variant import mitsuba
     from roomlight.scene.build import view_objects
 
@@ -100,19 +79,12 @@ def object_coverage(scene, view, supersample: int = 4) -> tuple[np.ndarray, np.n
     ms = mi.load_dict({"type": "scene", "sensor": v.camera.sensor(), **objs})
     sensor = ms.sensors()[0]
     w, h, s = v.camera.width, v.camera.height, int(supersample)
-    counts = np.zeros((len(v.objects), h, w), np.float32)
-    xs = (np.arange(w * s) + 0.5) / (w * s)
-    rows = max(1, MAX_RAYS_PER_CAST // (w * s * s))  # image rows per ray cast
-    for r0 in range(0, h, rows):
-        r1 = min(h, r0 + rows)
-        ys = (np.arange(r0 * s, r1 * s) + 0.5) / (h * s)
-        jj, ii = np.meshgrid(xs, ys)
-        pos = mi.Point2f(mi.Float(jj.ravel().astype(np.float32)), mi.Float(ii.ravel().astype(np.float32)))
-        ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-        si = ms.ray_intersect(ray)
-        for k, oid in enumerate(v.objects):
-            hit = np.array(dr.select(si.is_valid() & (si.shape == mi.ShapePtr(objs[oid])), 1.0, 0.0))
-            counts[k, r0:r1] = hit.reshape(r1 - r0, s, w, s).mean(axis=(1, 3))
+
+    def rays(x, y):  # the sensor's film coordinates are [0, 1] across the frame
+        pos = mi.Point2f(mi.Float((x / (w * s)).astype(np.float32)), mi.Float((y / (h * s)).astype(np.float32)))
+        return sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))[0]
+
+    counts = shape_coverage(ms, rays, [objs[oid] for oid in v.objects], w, h, s)
     coverage = counts.sum(0)
     ids = np.where(coverage > 0, counts.argmax(0) + 1, 0).astype(np.int32)
     return np.clip(coverage, 0.0, 1.0), ids

@@ -57,6 +57,7 @@ import torch
 from roomlight.config import StrictConfig
 from roomlight.errors import RoomlightError
 from roomlight.evaluate.records import check_settings
+from roomlight.render.raycast import render_in_passes, shape_coverage
 from roomlight.experiments.capacity_record import KIND_LABELS, KINDS, RESULT, VIEW_TAGS, score_renders
 from roomlight.experiments.files import atomic_json, atomic_npz
 from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout, sphere_proxy_radius
@@ -132,18 +133,12 @@ def _sensor(mi, origin, target, fov: float, width: int, height: int):
     return mi.load_dict(perspective_sensor(tuple(origin), tuple(target), fov_deg=fov, width=width, height=height))
 
 
-def _render(mi, scene, sensor, spp: int, seed: int, max_samples: int = 1 << 24) -> np.ndarray:
-    """(h, w, 3) float32 render of ``scene`` through ``sensor``, in averaged passes of at most
-    ``max_samples`` paths (pass k uses seed + k)."""
+def _render(mi, scene, sensor, spp: int, seed: int) -> np.ndarray:
+    """(h, w, 3) float32 render of ``scene`` through ``sensor``, in averaged passes
+    (:func:`~roomlight.render.raycast.render_in_passes`)."""
     size = sensor.film().crop_size()
-    passes = max(1, min(spp, math.ceil(spp * int(size[0]) * int(size[1]) / max_samples)))
-    base, extra = divmod(spp, passes)
-    acc = None
-    for k in range(passes):
-        n = base + (1 if k < extra else 0)
-        img = np.array(mi.render(scene, sensor=sensor, spp=n, seed=int(seed) + k), np.float64)[..., :3] * n
-        acc = img if acc is None else acc + img
-    return (acc / spp).astype(np.float32)
+    return render_in_passes(lambda n, sd: np.array(mi.render(scene, sensor=sensor, spp=n, seed=sd), np.float64)[..., :3],
+                            spp, int(size[0]) * int(size[1]), seed).astype(np.float32)
 
 
 def probe_masks(mi, scene, sensor, probe_ids, supersample: int = 4) -> np.ndarray:
@@ -152,22 +147,16 @@ def probe_masks(mi, scene, sensor, probe_ids, supersample: int = 4) -> np.ndarra
     ``scene`` is the ground-truth scene (room + probes), so a probe hidden behind furniture or
     behind another probe loses those pixels.
     """
-    import drjit as dr
-
     size = sensor.film().crop_size()
     w, h, s = int(size[0]), int(size[1]), int(supersample)
-    xs = (np.arange(w * s) + 0.5) / (w * s)
-    ys = (np.arange(h * s) + 0.5) / (h * s)
-    jj, ii = np.meshgrid(xs, ys)
-    pos = mi.Point2f(mi.Float(jj.ravel().astype(np.float32)), mi.Float(ii.ravel().astype(np.float32)))
-    ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-    si = scene.ray_intersect(ray)
+
+    def rays(x, y):  # the sensor's film coordinates are [0, 1] across the frame
+        pos = mi.Point2f(mi.Float((x / (w * s)).astype(np.float32)), mi.Float((y / (h * s)).astype(np.float32)))
+        return sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))[0]
+
     shapes = {sh.id(): sh for sh in scene.shapes()}
-    out = np.zeros((len(probe_ids), h, w), bool)
-    for k, pid in enumerate(probe_ids):
-        hit = np.array(dr.select(si.is_valid() & (si.shape == mi.ShapePtr(shapes[pid])), 1.0, 0.0))
-        out[k] = hit.reshape(h, s, w, s).min(axis=(1, 3)) > 0.5
-    return out
+    # every one of a pixel's rays on the probe: a mean of ones is exactly 1
+    return shape_coverage(scene, rays, [shapes[pid] for pid in probe_ids], w, h, s) >= 1.0
 
 
 class _Emitters:

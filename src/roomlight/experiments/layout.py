@@ -29,8 +29,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from roomlight.errors import RoomlightError
+from roomlight.render.raycast import RayCaster, sphere_directions
 
-__all__ = ["ProbeLayout", "LayoutConfig", "Caster", "place_layout", "cameras_for", "sphere_proxy_radius", "wall_light_room", "wall_light_layout", "fibonacci_directions"]
+__all__ = ["ProbeLayout", "LayoutConfig", "Caster", "place_layout", "cameras_for", "sphere_proxy_radius", "wall_light_room", "wall_light_layout"]
 
 
 @dataclass(frozen=True)
@@ -81,46 +82,13 @@ class ProbeLayout:
                    float(d["fov"]))
 
 
-def fibonacci_directions(n: int) -> np.ndarray:
-    """(n, 3) unit vectors spread evenly over the sphere (a Fibonacci lattice)."""
-    k = np.arange(n) + 0.5
-    y = 1.0 - 2.0 * k / n
-    r = np.sqrt(np.clip(1.0 - y * y, 0.0, None))
-    phi = k * math.pi * (3.0 - math.sqrt(5.0))
-    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], -1)
-
-
-class Caster:
-    """Ray casts against a Mitsuba scene: first-hit distances of many rays at once."""
-
-    def __init__(self, scene):
-        from roomlight.render.variant import mitsuba
-
-        self.mi = mitsuba()
-        self.scene = scene
-
-    def distances(self, origins, directions) -> np.ndarray:
-        """(N,) distance (metres) to the first surface along each ray; inf where a ray escapes.
-
-        Args:
-            origins: (N, 3) or (3,) ray origins; directions: (N, 3) (normalised here).
-        """
-        import drjit as dr
-
-        mi = self.mi
-        d = np.asarray(directions, np.float64).reshape(-1, 3)
-        d = d / np.linalg.norm(d, axis=1, keepdims=True)
-        o = np.broadcast_to(np.asarray(origins, np.float64).reshape(-1, 3), d.shape)
-        ray = mi.Ray3f(mi.Point3f(*[mi.Float(o[:, i].astype(np.float32)) for i in range(3)]),
-                       mi.Vector3f(*[mi.Float(d[:, i].astype(np.float32)) for i in range(3)]))
-        si = self.scene.ray_intersect(ray)
-        t = dr.select(si.is_valid(), si.t, dr.inf)
-        return np.asarray(t, np.float64)
+class Caster(RayCaster):
+    """Ray casts against a room's Mitsuba scene, with the questions the probe layout asks of them."""
 
     def clearance(self, point, n: int = 128) -> float:
         """Distance from ``point`` to the nearest surface over ``n`` directions (inf-safe: a ray
         escaping the room counts as 0, so points outside a closed room are refused)."""
-        t = self.distances(point, fibonacci_directions(n))
+        t = self.distances(point, sphere_directions(n))
         return 0.0 if not np.isfinite(t).all() else float(t.min())
 
     def sees(self, p, q, slack: float = 1e-3) -> bool:

@@ -23,7 +23,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import torch
 
 from roomlight.insert.fitted import FittedPhoto
 from roomlight.insert.objects import InsertSpec, PlacedObject, place_object

@@ -43,6 +43,7 @@ from roomlight.photobench.camera import PhotoCamera
 from roomlight.photobench.config import PhotoBenchConfig
 from roomlight.photobench.objects import OBJECT_SHAPES, InsertedObject, ProbeSphere, draw_material
 from roomlight.photobench.tracing import trace_coverage
+from roomlight.render.raycast import RayCaster, sphere_directions
 from roomlight.render.variant import mitsuba
 
 __all__ = ["StagingError", "Staging", "RayCaster", "eye_position", "choose_target", "support_points",
@@ -72,39 +73,6 @@ class Staging:
     probes: list[ProbeSphere]
     oracle_center: np.ndarray
     tries: int
-
-
-class RayCaster:
-    """Batched ray casts against a Mitsuba scene (numpy in, numpy out)."""
-
-    def __init__(self, scene):
-        self.scene = scene
-        self.mi = mitsuba()
-
-    def cast(self, origins, directions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(t (N,) with inf for misses, geometric normals (N, 3), hit points (N, 3)) of unit-direction rays."""
-        mi = self.mi
-        o = np.broadcast_to(np.asarray(origins, np.float64), np.shape(directions))
-        d = np.asarray(directions, np.float64)
-        length = np.linalg.norm(d, axis=-1, keepdims=True)
-        zero = length[:, 0] == 0  # no direction (a point cast at itself): a miss, as a NaN ray would be
-        d = d / np.where(zero[:, None], 1.0, length)
-        ray = mi.Ray3f(mi.Point3f(*[mi.Float(o[:, k].astype(np.float32)) for k in range(3)]),
-                       mi.Vector3f(*[mi.Float(d[:, k].astype(np.float32)) for k in range(3)]))
-        si = self.scene.ray_intersect(ray)
-        valid = np.asarray(si.is_valid(), bool) & ~zero
-        t = np.where(valid, np.asarray(si.t, np.float64), np.inf)
-        n = np.stack([np.asarray(si.n[k], np.float64) for k in range(3)], -1)
-        return t, n, o + np.where(valid[:, None], t[:, None], 0.0) * d
-
-
-def sphere_directions(n: int = 26) -> np.ndarray:
-    """(n, 3) roughly uniform unit directions (a Fibonacci sphere)."""
-    k = np.arange(n) + 0.5
-    y = 1.0 - 2.0 * k / n
-    r = np.sqrt(1.0 - y * y)
-    phi = math.pi * (3.0 - math.sqrt(5.0)) * k
-    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], -1)
 
 
 def _clearance(caster: RayCaster, point) -> tuple[float, int]:

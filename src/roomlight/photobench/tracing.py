@@ -17,6 +17,7 @@ import numpy as np
 
 from roomlight.errors import RoomlightError
 from roomlight.photobench.camera import PhotoCamera
+from roomlight.render.raycast import shape_coverage
 from roomlight.render.variant import mitsuba
 
 __all__ = ["MAX_RAYS_PER_PASS", "trace_image", "trace_depth", "trace_coverage", "camera_rays", "check_window"]
@@ -35,10 +36,6 @@ def camera_rays(mi, dr, camera: PhotoCamera, x, y):
     d = mi.Vector3f(*[c(m[k, 0]) * qx + c(m[k, 1]) * qy + c(m[k, 2]) * qz for k in range(3)])
     o = mi.Point3f(*[c(m[k, 3]) for k in range(3)])
     return mi.Ray3f(o, dr.normalize(d))
-
-
-def _rows_per_pass(camera: PhotoCamera, rays_per_pixel: int) -> int:
-    return max(1, min(camera.height, MAX_RAYS_PER_PASS // (camera.width * rays_per_pixel)))
 
 
 def trace_image(scene, camera: PhotoCamera, spp: int = 64, seed: int = 0, sampler: str = "multijitter",
@@ -132,19 +129,6 @@ def trace_coverage(scene, camera: PhotoCamera, shapes: list, supersample: int = 
 
     mi = mitsuba()
     s = int(supersample)
-    w, h = camera.width, camera.height
-    out = np.zeros((len(shapes), h, w), np.float32)
-    xs = (np.arange(w * s) + 0.5) / s
-    rows = _rows_per_pass(camera, s * s)
-    for r0 in range(0, h, rows):
-        r1 = min(h, r0 + rows)
-        ys = (np.arange(r0 * s, r1 * s) + 0.5) / s
-        jj, ii = np.meshgrid(xs, ys)
-        ray = camera_rays(mi, dr, camera, mi.Float(jj.ravel().astype(np.float32)),
-                          mi.Float(ii.ravel().astype(np.float32)))
-        si = scene.ray_intersect(ray)
-        for k, shape in enumerate(shapes):
-            hit = np.asarray(dr.select(si.is_valid() & (si.shape == mi.ShapePtr(shape)), 1.0, 0.0), np.float32)
-            out[k, r0:r1] = hit.reshape(r1 - r0, s, w, s).mean(axis=(1, 3))
-    return out
-
+    return shape_coverage(scene, lambda x, y: camera_rays(mi, dr, camera, mi.Float((x / s).astype(np.float32)),
+                                                          mi.Float((y / s).astype(np.float32))),
+                          shapes, camera.width, camera.height, s, MAX_RAYS_PER_PASS)

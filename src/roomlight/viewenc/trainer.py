@@ -157,7 +157,6 @@ class ViewEncoderTrainer:
     @torch.no_grad()
     def _encoder_means(self, rad: torch.Tensor, dep: torch.Tensor) -> torch.Tensor:
         """(N, 2, D): the prior encoder's posterior means of each panorama, as is and mirrored."""
-        norm = self.prior.normalization
         out = []
         for flip in (False, True):
             means = []
