@@ -359,6 +359,19 @@ def test_non_numeric_material_parameter_is_a_scene_error(scene_dir):
         load_scene(_write(root, d))
 
 
+@pytest.mark.parametrize("material, key", [({"type": "diffuse", "base_color": [1, 0, 0]}, "base_color"),
+                                           ({"type": "mirror", "alpha": 0.3}, "alpha"),
+                                           ({"type": "white", "reflectance": [0.2, 0.2, 0.2]}, "reflectance"),
+                                           ({"type": "principled", "alpha": 0.1}, "alpha")])
+def test_a_parameter_the_material_type_does_not_read_is_refused(scene_dir, material, key):
+    """Silently rendering a red diffuse object grey would be worse than an error."""
+    root, data = scene_dir
+    d = copy.deepcopy(data)
+    d["objects"][1]["material"] = material
+    with pytest.raises(SceneError, match=rf"objects\[1\]\.material\.{key}: a {material['type']} material does not take it"):
+        load_scene(_write(root, d))
+
+
 # ------------------------------------------------------------------------------- unreadable files
 def test_scene_file_problems(tmp_path):
     with pytest.raises(SceneError, match="no such scene file"):

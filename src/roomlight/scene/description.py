@@ -34,6 +34,9 @@ _SCENE_KEYS = ("version", "objects", "views", "emitter", "metadata")
 _CAMERA_KEYS = ("origin", "target", "up", "fov", "width", "height")
 _OBJECT_KEYS = ("id", "shape", "mesh", "translate", "scale", "rotate", "material")
 _MATERIAL_KEYS = ("type", "reflectance", "base_color", "alpha", "roughness", "metallic")
+#: The parameters each material type reads (see MaterialSpec.bsdf).
+_MATERIAL_PARAMS = {"diffuse": ("reflectance",), "matte": ("alpha",), "mirror": (),
+                    "principled": ("base_color", "roughness", "metallic"), "glossy": (), "white": ()}
 _VIEW_KEYS = ("camera", "objects", "image", "ldr", "mask")
 _EMITTER_KEYS = ("panorama", "depth")
 
@@ -163,6 +166,10 @@ class MaterialSpec:
         if t not in MATERIAL_TYPES:
             raise SceneError(f"{where}.type: expected one of {', '.join(MATERIAL_TYPES)}, got {t!r}")
         params = {k: v for k, v in d.items() if k != "type"}
+        wrong = sorted(set(params) - set(_MATERIAL_PARAMS[t]))
+        if wrong:  # another type's parameter would be dropped without a word: refuse it
+            takes = ", ".join(_MATERIAL_PARAMS[t]) or "no parameters"
+            raise SceneError(f"{where}.{wrong[0]}: a {t} material does not take it (it takes {takes})")
         for key in ("reflectance", "base_color"):
             if key in params:
                 params[key] = list(_vec(params[key], f"{where}.{key}"))
