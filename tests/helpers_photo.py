@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.photo.camera import Intrinsics
+from roomlight.photo.camera import PhotoCamera
 from roomlight.photo.synthetic import SyntheticObject, render_photo_case
 
 #: Two spheres on the floor of the example room turned so that its window faces the camera
@@ -68,5 +68,5 @@ def make_tiny_photo(folder: Path, radiance, depth, size=(48, 64), fov=70.0, pitc
                     origin=(0.0, 0.0, 0.0), key=0.35):
     """A photo case of ``objects`` (default: :data:`TINY_OBJECTS`) under the room (radiance, depth)."""
     h, w = size
-    return render_photo_case(folder, radiance, depth, objects or tiny_objects(), Intrinsics.from_fov(fov, w, h),
+    return render_photo_case(folder, radiance, depth, objects or tiny_objects(), PhotoCamera.from_fov(fov, w, h),
                              origin=origin, pitch_deg=pitch, spp=spp, seed=5, depth_kind="z", object_key=key)

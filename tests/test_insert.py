@@ -40,9 +40,9 @@ def test_materials_parse_or_fail_with_the_forms():
 
 def _plane_points(h=20, w=30, height=-1.0):
     """(h, w, 3) camera-frame points of a floor y = ``height`` seen by a camera pitched down 10 degrees."""
-    from roomlight.photo.camera import Intrinsics, camera_rotation
+    from roomlight.photo.camera import PhotoCamera, camera_rotation
 
-    k = Intrinsics.from_fov(60.0, w, h)
+    k = PhotoCamera.from_fov(60.0, w, h)
     rays = k.pixel_rays() @ camera_rotation(-10.0, 0.0).T   # room frame
     t = height / rays[..., 1]
     pts = rays * t[..., None]
@@ -138,10 +138,10 @@ def test_a_diffuse_object_in_a_room_of_uniform_radiance_shades_at_albedo_times_r
     h, w = fitted.radiance.shape[:2]
     # The room's surfaces well outside the depth mesh, so the local scene sits inside the light.
     from roomlight.examples import example_room
+    from roomlight.light import Light
 
     _, room_depth = example_room(h)
-    fitted.radiance = torch.full((h, w, 3), L)
-    fitted.depth = room_depth * 3.0
+    fitted.light = Light(torch.full((h, w, 3), L), room_depth * 3.0, "mesh", fitted.light.frame)
     # A photograph of that room, whose fitted objects are white too: every pixel shows radiance L.
     fitted.case.image = np.full_like(fitted.case.image, L)
     white = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}}
@@ -173,7 +173,7 @@ def test_export_of_a_photo_fit_carries_the_camera_the_depth_mesh_and_the_backpla
     cam = UsdGeom.Camera(stage.GetPrimAtPath("/World/Camera"))
     # the horizontal field of view and the pose of the photograph's camera
     fov = 2 * np.degrees(np.arctan(cam.GetHorizontalApertureAttr().Get() / (2 * cam.GetFocalLengthAttr().Get())))
-    assert fov == pytest.approx(fitted.case.intrinsics.fov_deg, rel=1e-6)
+    assert fov == pytest.approx(fitted.case.intrinsics.fov_x, rel=1e-6)
     m = np.array(UsdGeom.Xformable(cam).ComputeLocalToWorldTransform(Usd.TimeCode.Default()))
     np.testing.assert_allclose(m[3, :3], fitted.transform.translation, atol=1e-6)
     np.testing.assert_allclose(m[:3, :3].T, fitted.transform.rotation, atol=1e-6)

@@ -34,6 +34,7 @@ LAYERS = [
     ["render"],
     ["emitter"],
     ["io"],
+    ["light"],
     ["geometry"],
     ["color", "config", "progress", "cluster", "stats", "cpu", "methods"],
     ["errors"],

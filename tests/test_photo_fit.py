@@ -159,6 +159,7 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
     prior the paper's start reached 0.69 and 0.49 and the env map 1.11 and 1.52). From the view start the
     prior's env map is as good on this small scene (0.20 and 0.19, measured without the reflectance prior),
     so the claim above holds in the paper's setting only."""
+    from roomlight.light import Light
     from roomlight.photo import fit_photo
     from roomlight.photo.outputs import light_view
     from roomlight.photo.probes import LightView, ProbeSite, closeup_disc, render_probes
@@ -178,7 +179,8 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
     assert far_apart > 1.0  # metres, in the photograph's depth
     res = 32
     bsdfs = {lab: fits["prior"].materials.bsdf(lab) for lab in g.labels_present}
-    true = render_probes(LightView("truth", "mesh", truth["radiance"], truth["depth"], truth["transform"], bsdfs),
+    t = truth["transform"]
+    true = render_probes(LightView("truth", Light(truth["radiance"], truth["depth"], "mesh", t.matrix), t, bsdfs),
                          g.objects, sites, g.intrinsics, spp=128, resolution=res, materials=("mirror",), frame=False)
     discs = [closeup_disc(s, res) for s in sites]
     # the positions see different light: the true probes differ from each other

@@ -13,18 +13,18 @@ import torch
 
 from roomlight.color import linear_to_srgb, srgb_to_linear
 from roomlight.errors import InputFileError, RoomlightError
-from roomlight.photo.camera import Intrinsics, camera_rotation
+from roomlight.photo.camera import PhotoCamera, camera_rotation
 from roomlight.photo.masks import connected_components, labels_from_array, read_mask, resize_nearest
 from roomlight.photo.unproject import image_mesh, object_mesh, radial_distance, unproject
 
 INTRINSICS = {
-    "fov": Intrinsics.from_fov(70.0, 40, 30),
+    "fov": PhotoCamera.from_fov(70.0, 40, 30),
     # off-centre principal point and non-square pixels: unprojection supports both
-    "fx,fy,cx,cy": Intrinsics(31.0, 36.5, 17.25, 19.5, 40, 30),
+    "fx,fy,cx,cy": PhotoCamera(40, 30, 31.0, 36.5, 17.25, 19.5),
 }
 
 
-def _plane_depth(k: Intrinsics, normal, offset, kind):
+def _plane_depth(k: PhotoCamera, normal, offset, kind):
     """Depth of the plane n . p = offset seen through every pixel centre, computed from the ray
     parametrisation directly (not through unproject)."""
     n = np.asarray(normal, dtype=np.float64)
@@ -71,19 +71,19 @@ def test_fronto_parallel_plane_in_radial_depth_bends_as_expected():
 
 
 def test_intrinsics_forms_and_their_errors():
-    k = Intrinsics.from_fov(90.0, 200, 100)
-    assert k.fx == pytest.approx(100.0) and (k.cx, k.cy) == (100.0, 50.0) and k.fov_deg == pytest.approx(90.0)
+    k = PhotoCamera.from_fov(90.0, 200, 100)
+    assert k.fx == pytest.approx(100.0) and (k.cx, k.cy) == (100.0, 50.0) and k.fov_x == pytest.approx(90.0)
     half = k.scaled(100, 50)
     assert (half.fx, half.cx, half.cy) == pytest.approx((50.0, 50.0, 25.0))
-    assert Intrinsics.parse("1,2,3,4", 10, 10).to_dict() == {"fx": 1.0, "fy": 2.0, "cx": 3.0, "cy": 4.0}
+    assert PhotoCamera.parse("1,2,3,4", 10, 10).intrinsics_dict() == {"fx": 1.0, "fy": 2.0, "cx": 3.0, "cy": 4.0}
     for bad in ["1,2,3", "a,b,c,d", "0,1,1,1"]:
         with pytest.raises(RoomlightError):
-            Intrinsics.parse(bad, 10, 10)
+            PhotoCamera.parse(bad, 10, 10)
     with pytest.raises(RoomlightError, match="square pixels"):
-        Intrinsics(100, 103, 5, 5, 10, 10).check_square_pixels()
-    Intrinsics(100, 100.5, 5, 5, 10, 10).check_square_pixels()  # within 1 %
+        PhotoCamera(10, 10, 100, 103, 5, 5).check_square_pixels()
+    PhotoCamera(10, 10, 100, 100.5, 5, 5).check_square_pixels()  # within 1 %
     with pytest.raises(RoomlightError, match="field of view"):
-        Intrinsics.from_fov(180.0, 10, 10)
+        PhotoCamera.from_fov(180.0, 10, 10)
 
 
 def test_camera_rotation_pitch_and_roll():
@@ -103,7 +103,7 @@ def test_pinhole_sensor_sees_the_pixel_rays_of_the_intrinsics(mi):
     from roomlight.photo.geometry import SceneTransform
     from roomlight.photo.scene import photo_sensor
 
-    k = Intrinsics(30.0, 30.0, 17.25, 12.5, 40, 30)
+    k = PhotoCamera(40, 30, 30.0, 30.0, 17.25, 12.5)
     for pitch, roll in [(0.0, 0.0), (-25.0, 10.0)]:
         t = SceneTransform(camera_rotation(pitch, roll), 1.0, np.array([0.3, 1.2, -0.4]))
         sensor = mi.load_dict(photo_sensor(k, t))
@@ -134,7 +134,7 @@ def test_depth_mesh_of_a_plane_keeps_every_triangle_facing_the_camera():
 
 
 def test_depth_mesh_cuts_triangles_across_a_depth_step():
-    k = Intrinsics.from_fov(30.0, 12, 8)  # 2.5 degrees per pixel: the flat parts change by < 1.5 % per pixel
+    k = PhotoCamera.from_fov(30.0, 12, 8)  # 2.5 degrees per pixel: the flat parts change by < 1.5 % per pixel
     depth = np.full((8, 12), 2.0)
     depth[:, 7:] = 3.0  # a step between columns 6 and 7
     mesh = image_mesh(depth, k, "z", edge_tolerance=0.05)
@@ -144,7 +144,7 @@ def test_depth_mesh_cuts_triangles_across_a_depth_step():
 
 
 def test_object_mesh_is_cut_to_its_label_and_reindexed():
-    k = Intrinsics.from_fov(60.0, 10, 10)
+    k = PhotoCamera.from_fov(60.0, 10, 10)
     mesh = image_mesh(np.full((10, 10), 2.0), k, "radial")
     labels = np.zeros((10, 10), int)
     labels[2:5, 3:7] = 4
@@ -252,7 +252,7 @@ def _write_case(folder, size=(24, 32), kind="z"):
     from roomlight.photo.case import write_photo_case
 
     h, w = size
-    k = Intrinsics.from_fov(60.0, w, h)
+    k = PhotoCamera.from_fov(60.0, w, h)
     depth, _ = _plane_depth(k, (0, 0.3, 1), -2.0, kind)
     labels = np.zeros((h, w), np.int32)
     labels[5:15, 6:14] = 1
@@ -274,7 +274,7 @@ def test_photo_case_round_trip(tmp_path):
     assert cam["format"] == "roomlight.photo-case" and cam["intrinsics"]["fx"] == pytest.approx(k.fx)
     # options override the folder's camera.json
     case = load_photo(tmp_path / "case", fov=90.0, depth_kind="radial", pitch=-10)
-    assert case.intrinsics.fov_deg == pytest.approx(90.0) and case.depth_kind == "radial" and case.pitch_deg == -10
+    assert case.intrinsics.fov_x == pytest.approx(90.0) and case.depth_kind == "radial" and case.pitch_deg == -10
 
 
 def test_photo_image_files_srgb_png_and_linear_exr(tmp_path):
@@ -389,7 +389,7 @@ def test_estimators_callable_module_function_and_moge_conversion(tmp_path):
     (tmp_path / "case" / "depth.exr").unlink()
     (tmp_path / "case" / "camera.json").write_text(json.dumps({"format": "roomlight.photo-case", "version": 1}))
     case = load_photo(tmp_path / "case", estimator=stand_in_estimator)
-    assert case.intrinsics.fov_deg == pytest.approx(60.0) and np.all(case.depth == 2.0)
+    assert case.intrinsics.fov_x == pytest.approx(60.0) and np.all(case.depth == 2.0)
     assert "estimated" in case.files["depth"]
     assert resolve_estimator("test_photo_geometry:stand_in_estimator") is stand_in_estimator
     with pytest.raises(RoomlightError, match="module:function"):

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
@@ -79,8 +79,8 @@ def list_cases(bench_dir, methods, shard=(0, 1)) -> list[SceneCase]:
 def emitter_depth(result) -> torch.Tensor | None:
     """(H, W) float32 depth of a recovered emitter at its radiance's resolution: its own map, a
     constant for a sphere proxy, None for an environment map (light at infinity)."""
-    from roomlight.emitter.kind import parse_emitter_kind
     from roomlight.emitter.sphere import sphere_depth
+    from roomlight.light import parse_emitter_kind
 
     if result.depth is not None:
         return result.depth.detach().float().cpu()
@@ -181,26 +181,19 @@ def run_case(case: SceneCase, out_dir, fit, fit_config=None, model=None, eval_sp
     return record
 
 
-@dataclass
-class OracleResult:
-    """The ground-truth emitter in the shape of a fit result."""
+def oracle_fit(scene):
+    """The scene's ground-truth emitter as a :class:`~roomlight.inverse.fitter.FitResult` of method
+    ``oracle``: its light is the true panorama (radiance (H, 2H, 3), depth (H, 2H) metres) as a 2.5D
+    area light; nothing was fitted, so it has no history, best iteration or step counts."""
+    from roomlight.inverse.fitter import FitResult
+    from roomlight.light import Light
 
-    radiance: torch.Tensor
-    depth: torch.Tensor
-    emitter_kind: str = "mesh"
-    history: list = field(default_factory=list)
-    best_iteration: int | None = None
-    seconds: float = 0.0
-
-
-def oracle_fit(scene) -> OracleResult:
-    """The scene's ground-truth emitter (radiance (H, W, 3), depth (H, W)) as a result."""
     if scene.emitter is None:
         raise BenchError(f"{scene.root}: the scene has no emitter; the oracle needs the ground truth")
     pano = scene.emitter.load()
     if pano.depth is None:
         raise BenchError(f"{scene.emitter.panorama}: the ground-truth emitter has no depth")
-    return OracleResult(torch.from_numpy(pano.radiance), torch.from_numpy(pano.depth))
+    return FitResult(ORACLE, Light(pano.radiance, pano.depth, "mesh"), best_iteration=None, nonfinite_steps=None)
 
 
 def _default_fit():

@@ -62,7 +62,7 @@ def command(pano, depth_path, kind, out_dir, resolution, clamp_negative, fill_no
       preview.png   tone-mapped radiance above colour-mapped depth
     """
     from roomlight.emitter.export import export_emitter
-    from roomlight.emitter.kind import parse_emitter_kind
+    from roomlight.light import parse_emitter_kind
 
     k = parse_emitter_kind(kind)
     rad, dep, meta = load_panorama_tensors(pano, depth_path, resolution, clamp_negative, fill_nonfinite)

@@ -77,7 +77,7 @@ def export_emitter(out_dir, radiance: torch.Tensor, depth: torch.Tensor | None, 
     """
     from roomlight.io import save_png, write_exr, write_ply
     from roomlight.io.preview import colorize_depth, tonemap_gamma
-    from roomlight.emitter.kind import parse_emitter_kind
+    from roomlight.light import parse_emitter_kind
 
     k = parse_emitter_kind(kind)
     out = Path(out_dir)

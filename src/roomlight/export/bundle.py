@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import InputFileError
+from roomlight.light import Light
 
 __all__ = ["SceneObject", "LightSource", "load_light"]
 
@@ -47,13 +48,12 @@ class SceneObject:
 class LightSource:
     """A 2.5D area light ready to be shown or exported.
 
-    ``radiance`` (H, W, 3) and ``depth`` (H, W) are the panorama (linear radiance, radial metres);
-    ``vertices`` (N, 3), ``faces`` (F, 3) and ``uv`` (N, 2) the emissive mesh, with v = 0 at the
-    texture's top row, as in the bundle's PLY. The capture point is the origin.
+    ``light`` is the panorama (a ``mesh`` :class:`~roomlight.light.Light`: linear radiance, radial
+    metres; its capture point is the origin); ``vertices`` (N, 3), ``faces`` (F, 3) and ``uv`` (N, 2)
+    the emissive mesh, with v = 0 at the texture's top row, as in the bundle's PLY.
     """
 
-    radiance: np.ndarray
-    depth: np.ndarray
+    light: Light
     vertices: np.ndarray
     faces: np.ndarray
     uv: np.ndarray
@@ -64,13 +64,21 @@ class LightSource:
     #: (h, w, 3) linear RGB seen by ``camera`` (a fit-photo's photograph), or None
     backplate: np.ndarray | None = None
 
+    @property
+    def radiance(self) -> np.ndarray:
+        """(H, 2H, 3) float32 linear radiance (the light's, as numpy)."""
+        return self.light.radiance.numpy()
 
-def _mesh_from_panorama(radiance: np.ndarray, depth: np.ndarray):
-    import torch
+    @property
+    def depth(self) -> np.ndarray:
+        """(H, 2H) float32 radial depth, metres (the light's, as numpy)."""
+        return self.light.depth.numpy()
 
+
+def _mesh_from_panorama(light: Light):
     from roomlight.emitter.area_light import build_area_light
 
-    mesh = build_area_light(torch.from_numpy(radiance).float(), torch.from_numpy(depth).float())
+    mesh = build_area_light(light.radiance, light.depth)
     return mesh.vertices.numpy(), mesh.faces.numpy(), mesh.uv.numpy()
 
 
@@ -87,7 +95,7 @@ def _from_bundle(d: Path) -> LightSource:
     if not (d / "depth.exr").is_file():
         raise InputFileError(d, "this bundle has no depth.exr, so there is no 2.5D light to show",
                              "rebuild it with 'roomlight emitter PANO --as mesh'")
-    depth = read_depth(d / "depth.exr").astype(np.float32)
+    light = Light(radiance, read_depth(d / "depth.exr"), "mesh")
     meta = json.loads((d / "emitter.json").read_text()) if (d / "emitter.json").is_file() else {}
     if (d / "emitter.ply").is_file():
         ply = read_ply(d / "emitter.ply")
@@ -95,9 +103,9 @@ def _from_bundle(d: Path) -> LightSource:
             raise InputFileError(d / "emitter.ply", "the mesh has no texture coordinates (u, v)")
         v, f, uv = ply["vertices"], ply["faces"], ply["uv"]
     else:  # an env-map bundle that kept its depth
-        v, f, uv = _mesh_from_panorama(radiance, depth)
-    return LightSource(radiance, depth, v.astype(np.float32), f.astype(np.int32), uv.astype(np.float32),
-                       source=str(d), metadata=meta)
+        v, f, uv = _mesh_from_panorama(light)
+    return LightSource(light, v.astype(np.float32), f.astype(np.int32), uv.astype(np.float32), source=str(d),
+                       metadata=meta)
 
 
 def _scene_objects(scene) -> tuple[list[SceneObject], dict | None]:
@@ -132,10 +140,9 @@ def _from_scene(path: Path) -> LightSource:
 
 
 def _from_panorama_arrays(radiance, depth, source: str) -> LightSource:
-    radiance = np.ascontiguousarray(radiance, np.float32)
-    depth = np.ascontiguousarray(depth, np.float32)
-    v, f, uv = _mesh_from_panorama(radiance, depth)
-    return LightSource(radiance, depth, v, f.astype(np.int32), uv, source=source)
+    light = Light(radiance, depth, "mesh")
+    v, f, uv = _mesh_from_panorama(light)
+    return LightSource(light, v, f.astype(np.int32), uv, source=source)
 
 
 def _find_scene(d: Path) -> Path | None:
@@ -215,8 +222,8 @@ def _add_photo(light: LightSource, folder: Path) -> None:
                                  geo.mesh.faces.astype(np.int32), "shadow_catcher", "photo")]
     k = case.intrinsics
     light.camera = {"origin": t.translation.tolist(), "target": (t.translation + t.forward).tolist(),
-                    "up": t.up.tolist(), "fov": k.fov_deg, "rotation": t.rotation.tolist(),
-                    "intrinsics": {"fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy}, "width": k.width,
+                    "up": t.up.tolist(), "fov": k.fov_x, "rotation": t.rotation.tolist(),
+                    "intrinsics": k.intrinsics_dict(), "width": k.width,
                     "height": k.height}
     light.backplate = np.ascontiguousarray(case.image, np.float32)
     light.metadata["photo_fit"] = {"method": fitted.method, "scale": float(t.scale)}

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from roomlight.errors import InputFileError, RoomlightError
+from roomlight.light import Light
 
 __all__ = ["FittedPhoto", "load_fitted_photo", "fitted_lights"]
 
@@ -31,22 +32,43 @@ class FittedPhoto:
         method: the method that fitted the light.
         case: the photograph (:class:`~roomlight.photo.case.PhotoCase`), read from the recorded inputs.
         config: the fit's settings (:class:`~roomlight.photo.config.PhotoFitConfig`).
-        transform: camera frame -> the light's room frame.
-        kind: ``mesh`` (2.5D area light) or ``envmap``.
-        radiance: (H, W, 3) linear radiance of the light.
-        depth: (H, W) metres in the room frame, or None for an env map.
+        light: the fitted light: radiance (H, 2H, 3) linear, depth (H, 2H) metres of the room frame
+            (``mesh``) or None (``envmap``); its frame is camera frame -> the light's room frame.
+        transform: that frame as the fit's parts (:class:`~roomlight.photo.geometry.SceneTransform`:
+            rotation, scale, translation, as ``result.json`` records them); the photograph's geometry
+            is mapped into the room with these.
         materials: fitted material of each object, by mask label: {albedo: [r, g, b], roughness, metallic}.
+
+    Raises:
+        RoomlightError: the light's frame is not ``transform``.
     """
 
     folder: Path
     method: str
     case: object
     config: object
+    light: Light
     transform: object
-    kind: str
-    radiance: torch.Tensor
-    depth: torch.Tensor | None
     materials: dict[int, dict]
+
+    def __post_init__(self):
+        if not np.allclose(self.light.frame, self.transform.matrix):
+            raise RoomlightError(f"{self.folder}: the light's frame is not the fit's camera-to-room transform")
+
+    @property
+    def kind(self) -> str:
+        """``mesh`` (2.5D area light) or ``envmap``."""
+        return self.light.kind
+
+    @property
+    def radiance(self) -> torch.Tensor:
+        """(H, 2H, 3) linear radiance of the light."""
+        return self.light.radiance
+
+    @property
+    def depth(self) -> torch.Tensor | None:
+        """(H, 2H) metres in the room frame, or None for an env map."""
+        return self.light.depth
 
     def bsdfs(self) -> dict[int, dict]:
         """Each fitted object's Mitsuba BSDF dict, by label."""
@@ -81,7 +103,7 @@ def _read_json(path: Path, folder: Path) -> dict:
 def load_fitted_photo(folder, light: str | None = None) -> FittedPhoto:
     """Read a ``fit-photo`` output folder (``light``: a compared method's name, default the main one)."""
     from roomlight.io import read_panorama
-    from roomlight.photo.camera import Intrinsics
+    from roomlight.photo.camera import PhotoCamera
     from roomlight.photo.case import load_photo
     from roomlight.photo.config import PhotoFitConfig
     from roomlight.photo.geometry import SceneTransform
@@ -108,7 +130,7 @@ def load_fitted_photo(folder, light: str | None = None) -> FittedPhoto:
             raise InputFileError(inputs[role], f"the fit's {role} file is gone (moved or deleted since the fit)")
     h, w = cam["input_size"]
     k = cam["intrinsics_input"]
-    intr = Intrinsics(float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]), int(w), int(h))
+    intr = PhotoCamera(int(w), int(h), float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]))
     case = load_photo(inputs["image"], depth=inputs["depth"], depth_kind=cam.get("depth_kind"), mask=inputs["mask"],
                       normals=inputs.get("normals"), intrinsics=intr, pitch=float(cam.get("pitch_deg", 0.0)),
                       roll=float(cam.get("roll_deg", 0.0)))
@@ -117,16 +139,13 @@ def load_fitted_photo(folder, light: str | None = None) -> FittedPhoto:
     transform = SceneTransform(np.asarray(t["rotation"]), float(t["scale"]), np.asarray(t["translation"]))
     pano = read_panorama(root / "panorama.exr")
     kind = str(result.get("emitter_kind", "mesh"))
-    radiance = torch.from_numpy(np.ascontiguousarray(pano.radiance, dtype=np.float32))
-    depth = None
-    if kind == "mesh":
-        if pano.depth is None:
-            raise InputFileError(root / "panorama.exr", "a 2.5D light without depth")
-        depth = torch.from_numpy(np.ascontiguousarray(pano.depth, dtype=np.float32))
+    if kind == "mesh" and pano.depth is None:
+        raise InputFileError(root / "panorama.exr", "a 2.5D light without depth")
+    light = Light(pano.radiance, pano.depth if kind == "mesh" else None, kind, transform.matrix)
     materials = {}
     mat_file = root / "materials.json"
     if mat_file.is_file():
         for m in json.loads(mat_file.read_text()).get("objects", []):
             materials[int(m["label"])] = {"albedo": [float(v) for v in m["albedo"]],
                                           "roughness": float(m["roughness"]), "metallic": float(m["metallic"])}
-    return FittedPhoto(root, str(result.get("method")), case, config, transform, kind, radiance, depth, materials)
+    return FittedPhoto(root, str(result.get("method")), case, config, light, transform, materials)

@@ -39,6 +39,7 @@ from roomlight.inverse.config import FitConfig
 from roomlight.inverse.lights import LightModel
 from roomlight.inverse.objective import image_loss
 from roomlight.inverse.repulsion import repulsion_penalty
+from roomlight.light import Light
 
 __all__ = ["FitResult", "Fitter", "MAX_NONFINITE_IN_A_ROW", "CROP_MARGIN_PX", "mask_window"]
 
@@ -66,27 +67,44 @@ def mask_window(mask: torch.Tensor, margin: int = CROP_MARGIN_PX) -> tuple[int, 
 
 @dataclass
 class FitResult:
-    """What a fit recovered.
+    """What a fit recovered (or, for the benchmark's oracle, the true light in the same shape).
 
     Attributes:
-        radiance: (H, W, 3) linear radiance (exposure applied), detached, CPU.
-        depth: (H, W) metres, or None for env maps.
-        emitter_kind: ``mesh``, ``envmap`` or ``sphere:R`` (accepted by EmitterScene).
+        method: the method's name.
+        light: the recovered light: radiance (H, 2H, 3) linear (exposure applied), depth (H, 2H)
+            metres or None, its kind; its frame is the identity (the light sits at the fitted
+            scene's origin).
         history: one dict per iteration (loss terms, seconds, skipped flags, fixed-seed checks).
-        best_iteration: iteration whose parameters were kept.
+        best_iteration: iteration whose parameters were kept; None when nothing was fitted (an oracle).
         best_loss: their fixed-seed objective.
+        seconds: the fit's duration.
+        nonfinite_steps: skipped non-finite steps; None when nothing was fitted.
+        config: the fit's settings.
     """
 
     method: str
-    radiance: torch.Tensor
-    depth: torch.Tensor | None
-    emitter_kind: str
+    light: Light
     history: list[dict] = field(default_factory=list)
-    best_iteration: int = 0
+    best_iteration: int | None = 0
     best_loss: float = float("inf")
     seconds: float = 0.0
-    nonfinite_steps: int = 0
+    nonfinite_steps: int | None = 0
     config: dict = field(default_factory=dict)
+
+    @property
+    def radiance(self) -> torch.Tensor:
+        """(H, 2H, 3) float32 linear radiance, CPU."""
+        return self.light.radiance
+
+    @property
+    def depth(self) -> torch.Tensor | None:
+        """(H, 2H) float32 radial depth in metres, or None (env map, sphere proxy)."""
+        return self.light.depth
+
+    @property
+    def emitter_kind(self) -> str:
+        """``mesh``, ``envmap`` or ``sphere:R`` (accepted by EmitterScene)."""
+        return self.light.kind
 
 
 class Fitter:
@@ -281,11 +299,9 @@ class Fitter:
             self.light.load_state_dict(best[2])
         with torch.no_grad():
             rad, depth = self.light.emitter()
-        return FitResult(method="", radiance=rad.detach().cpu().float(),
-                         depth=depth.detach().cpu().float() if depth is not None else None,
-                         emitter_kind=self.escene_kind(), history=history, best_iteration=best[1],
-                         best_loss=best[0], seconds=time.perf_counter() - t_start, nonfinite_steps=nonfinite,
-                         config=c.to_dict())
+        return FitResult(method="", light=Light(rad, depth, self.escene_kind()), history=history,
+                         best_iteration=best[1], best_loss=best[0], seconds=time.perf_counter() - t_start,
+                         nonfinite_steps=nonfinite, config=c.to_dict())
 
     def escene_kind(self) -> str:
         return str(self.escene.kind)

@@ -7,7 +7,7 @@ fitted jointly through Mitsuba, with the photograph's unmasked pixels constraini
 inside the camera's frustum. See docs/photo.md.
 """
 
-from roomlight.photo.camera import Intrinsics, camera_rotation
+from roomlight.photo.camera import PhotoCamera, camera_rotation
 from roomlight.photo.case import PhotoCase, load_photo, write_photo_case
 from roomlight.photo.config import PHOTO_PRESETS, PhotoFitConfig, photo_config
 from roomlight.photo.estimator import GeometryEstimate, MoGeEstimator, resolve_estimator
@@ -17,7 +17,7 @@ from roomlight.photo.materials import ObjectMaterials
 from roomlight.photo.pipeline import PhotoRun, run_photo
 from roomlight.photo.unproject import image_mesh, object_mesh, unproject
 
-__all__ = ["Intrinsics", "camera_rotation", "PhotoCase", "load_photo", "write_photo_case", "PHOTO_PRESETS",
+__all__ = ["PhotoCamera", "camera_rotation", "PhotoCase", "load_photo", "write_photo_case", "PHOTO_PRESETS",
            "PhotoFitConfig", "photo_config", "GeometryEstimate", "MoGeEstimator", "resolve_estimator", "PHOTO_METHODS",
            "PhotoFit", "PhotoFitter", "PhotoModel", "fit_photo", "ObjectLabels", "connected_components", "read_mask",
            "ObjectMaterials", "PhotoRun", "run_photo", "image_mesh", "object_mesh", "unproject"]

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import InputFileError, RoomlightError
-from roomlight.photo.camera import Intrinsics
+from roomlight.photo.camera import PhotoCamera
 from roomlight.photo.masks import ObjectLabels, labels_from_array, read_mask_array
 from roomlight.photo.unproject import DEPTH_KINDS
 
@@ -64,7 +64,7 @@ class PhotoCase:
     image: np.ndarray
     depth: np.ndarray
     depth_kind: str
-    intrinsics: Intrinsics
+    intrinsics: PhotoCamera
     objects: ObjectLabels
     normals: np.ndarray | None = None
     pitch_deg: float = 0.0
@@ -83,7 +83,7 @@ class PhotoCase:
     def camera_json(self) -> dict:
         """The ``camera.json`` content describing this case."""
         return {"format": CASE_FORMAT, "version": CASE_VERSION, "width": self.width, "height": self.height,
-                "intrinsics": self.intrinsics.to_dict(), "depth_kind": self.depth_kind,
+                "intrinsics": self.intrinsics.intrinsics_dict(), "depth_kind": self.depth_kind,
                 "pitch_deg": self.pitch_deg, "roll_deg": self.roll_deg}
 
 
@@ -242,7 +242,7 @@ def _first(folder: Path, names) -> Path | None:
 
 
 def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, normals=None, fov: float | None = None,
-               intrinsics: str | Intrinsics | None = None, pitch: float | None = None, roll: float | None = None,
+               intrinsics: str | PhotoCamera | None = None, pitch: float | None = None, roll: float | None = None,
                estimator=None, min_object_fraction: float = 0.0) -> PhotoCase:
     """Read a photograph and what describes it; arguments override a photo case folder's files.
 
@@ -281,22 +281,22 @@ def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, n
         raise InputFileError(files["camera"], f"describes a {camera.get('width')}x{camera.get('height')} image but "
                                               f"{image_path} is {w}x{h}")
 
-    # Intrinsics: the command line, then camera.json, then the estimator.
-    K: Intrinsics | None = None
+    # The intrinsics: the command line, then camera.json, then the estimator.
+    K: PhotoCamera | None = None
     if intrinsics is not None and fov is not None:
         raise RoomlightError("pass either --fov or --intrinsics, not both")
     try:
-        if isinstance(intrinsics, Intrinsics):
+        if isinstance(intrinsics, PhotoCamera):
             K = intrinsics
         elif intrinsics is not None:
-            K = Intrinsics.parse(intrinsics, w, h)
+            K = PhotoCamera.parse(intrinsics, w, h)
         elif fov is not None:
-            K = Intrinsics.from_fov(fov, w, h)
+            K = PhotoCamera.from_fov(fov, w, h)
         elif "intrinsics" in camera:
             k = camera["intrinsics"]
-            K = Intrinsics(float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]), w, h)
+            K = PhotoCamera(w, h, float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]))
         elif "fov_deg" in camera:
-            K = Intrinsics.from_fov(float(camera["fov_deg"]), w, h)
+            K = PhotoCamera.from_fov(float(camera["fov_deg"]), w, h)
     except InputFileError:
         raise
     except RoomlightError as exc:
@@ -348,7 +348,7 @@ def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, n
 
 
 # ---------------------------------------------------------------------------------------- writer
-def write_photo_case(folder, image: np.ndarray, depth: np.ndarray, labels: np.ndarray, intrinsics: Intrinsics,
+def write_photo_case(folder, image: np.ndarray, depth: np.ndarray, labels: np.ndarray, intrinsics: PhotoCamera,
                      depth_kind: str = "radial", normals: np.ndarray | None = None, pitch_deg: float = 0.0,
                      roll_deg: float = 0.0) -> dict[str, Path]:
     """Write a photo case folder (module docstring): ``image.exr``, ``depth.exr``, ``mask.png``,

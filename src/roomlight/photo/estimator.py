@@ -6,7 +6,7 @@ as (H, W, 3) float32 sRGB-encoded values in [0, 1] (what such networks are train
 ``(depth, intrinsics, normals)`` with
 
 - ``depth``: (H, W) metres, z-depth (build a :class:`GeometryEstimate` to say ``radial``);
-- ``intrinsics``: an :class:`~roomlight.photo.camera.Intrinsics`, ``(fx, fy, cx, cy)`` in pixels,
+- ``intrinsics``: a :class:`~roomlight.photo.camera.PhotoCamera`, ``(fx, fy, cx, cy)`` in pixels,
   a 3 x 3 pixel matrix, or None when unknown;
 - ``normals``: (H, W, 3) unit normals in roomlight's camera frame (x right, y up, z towards the
   viewer), or None.
@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import RoomlightError
-from roomlight.photo.camera import Intrinsics
+from roomlight.photo.camera import PhotoCamera
 
 __all__ = ["GeometryEstimate", "MoGeEstimator", "MOGE_DEFAULT_MODEL", "moge_available", "resolve_estimator",
            "estimate_geometry", "as_estimate"]
@@ -42,21 +42,22 @@ class GeometryEstimate:
     """What an estimator returns (see the module docstring)."""
 
     depth: np.ndarray
-    intrinsics: Intrinsics | None = None
+    intrinsics: PhotoCamera | None = None
     normals: np.ndarray | None = None
     kind: str = "z"
     name: str = "estimator"
 
 
-def _intrinsics(value, width: int, height: int) -> Intrinsics | None:
-    if value is None or isinstance(value, Intrinsics):
+def _intrinsics(value, width: int, height: int) -> PhotoCamera | None:
+    if value is None or isinstance(value, PhotoCamera):
         return value
     a = np.asarray(value, dtype=np.float64)
     if a.shape == (4,):
-        return Intrinsics(*map(float, a), width, height)
+        return PhotoCamera(width, height, *map(float, a))
     if a.shape == (3, 3):
-        return Intrinsics(float(a[0, 0]), float(a[1, 1]), float(a[0, 2]), float(a[1, 2]), width, height)
-    raise RoomlightError(f"estimator: intrinsics must be (fx, fy, cx, cy), a 3x3 matrix or Intrinsics, got shape {a.shape}")
+        return PhotoCamera(width, height, float(a[0, 0]), float(a[1, 1]), float(a[0, 2]), float(a[1, 2]))
+    raise RoomlightError(f"estimator: intrinsics must be (fx, fy, cx, cy), a 3x3 matrix or a PhotoCamera, "
+                         f"got shape {a.shape}")
 
 
 def as_estimate(result, width: int, height: int, name: str = "estimator") -> GeometryEstimate:
@@ -152,7 +153,7 @@ class MoGeEstimator:
             raise RoomlightError("moge: no pixel has a valid depth")
         depth = np.where(valid, depth, depth[valid].max()).astype(np.float32)
         k = arr(out["intrinsics"]).astype(np.float64)
-        intr = Intrinsics(k[0, 0] * width, k[1, 1] * height, k[0, 2] * width, k[1, 2] * height, width, height)
+        intr = PhotoCamera(width, height, k[0, 0] * width, k[1, 1] * height, k[0, 2] * width, k[1, 2] * height)
         normals = None
         if "normal" in out:
             n = arr(out["normal"]).astype(np.float32)

@@ -236,7 +236,7 @@ def _state_tag(method: str, case, light: LightModel) -> dict:
     for a in (case.image, case.depth, case.objects.labels):
         h.update(np.ascontiguousarray(a).tobytes())
     return {"method": method, "light": type(light).__name__, "kind": str(light.kind), "photo": h.hexdigest()[:16],
-            "depth_kind": case.depth_kind, "intrinsics": case.intrinsics.to_dict(),
+            "depth_kind": case.depth_kind, "intrinsics": case.intrinsics.intrinsics_dict(),
             "pitch_roll": [case.pitch_deg, case.roll_deg]}
 
 

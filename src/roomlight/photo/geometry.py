@@ -18,7 +18,8 @@ import numpy as np
 import torch
 
 from roomlight.errors import RoomlightError
-from roomlight.photo.camera import Intrinsics, camera_rotation
+from roomlight.light import similarity_parts
+from roomlight.photo.camera import PhotoCamera, camera_rotation
 from roomlight.photo.masks import erode, resize_nearest
 from roomlight.photo.unproject import ImageMesh, ObjectMesh, image_mesh, object_mesh, unproject
 
@@ -65,6 +66,21 @@ class SceneTransform:
         return {"rotation": self.rotation.round(9).tolist(), "scale": float(self.scale),
                 "translation": self.translation.round(9).tolist()}
 
+    @property
+    def matrix(self) -> np.ndarray:
+        """(4, 4) float64 [scale * rotation | translation]: the same map as a similarity matrix (a
+        :class:`~roomlight.light.Light`'s frame)."""
+        m = np.eye(4)
+        m[:3, :3] = float(self.scale) * self.rotation
+        m[:3, 3] = self.translation
+        return m
+
+    @classmethod
+    def from_matrix(cls, m, what: str = "light frame") -> SceneTransform:
+        """The parts of a (4, 4) similarity (see :func:`roomlight.light.similarity_parts`)."""
+        s, r, t = similarity_parts(m, what)
+        return cls(r, s, t)
+
 
 @dataclass
 class FrustumSamples:
@@ -102,7 +118,7 @@ class PhotoGeometry:
         pixel_points: (Hr * Wr, 3) the point every render pixel sees (objects and room).
     """
 
-    intrinsics: Intrinsics
+    intrinsics: PhotoCamera
     target: np.ndarray
     labels: np.ndarray
     loss_mask: np.ndarray

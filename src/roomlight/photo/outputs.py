@@ -63,8 +63,7 @@ def light_view(fit, name: str | None = None):
     """The fitted light of a :class:`~roomlight.photo.fitter.PhotoFit` as a probes :class:`LightView`."""
     from roomlight.photo.probes import LightView
 
-    r = fit.result
-    return LightView(name or fit.method, str(fit.fitter.escene.kind), r.radiance, r.depth, fit.transform,
+    return LightView(name or fit.method, fit.result.light.with_frame(fit.transform.matrix), fit.transform,
                      {lab: fit.materials.bsdf(lab) for lab in fit.materials.labels})
 
 
@@ -142,8 +141,9 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "light_parameters": fit.model.light_model.describe(),
         "materials": materials,
         "objects": objects,
-        "camera": {"intrinsics_input": case.intrinsics.to_dict(), "input_size": [case.height, case.width],
-                   "render_size": [g.intrinsics.height, g.intrinsics.width], "intrinsics_render": g.intrinsics.to_dict(),
+        "camera": {"intrinsics_input": case.intrinsics.intrinsics_dict(), "input_size": [case.height, case.width],
+                   "render_size": [g.intrinsics.height, g.intrinsics.width],
+                   "intrinsics_render": g.intrinsics.intrinsics_dict(),
                    "depth_kind": case.depth_kind, "pitch_deg": case.pitch_deg, "roll_deg": case.roll_deg},
         "transform": fit.transform.to_dict(),
         "initial": fit.initial,

@@ -38,6 +38,7 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
         say: called with one line per finished step (e.g. ``click.echo``).
     """
     from roomlight.inverse.outputs import recorded_light_note
+    from roomlight.light import Light
     from roomlight.photo.outputs import atomic_write, light_view, write_fit_files
     from roomlight.photo.probes import LightView, choose_probe_sites, probe_figure, render_probes
 
@@ -64,7 +65,8 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
     views = [light_view(f) for f in fits]
     if len(fits) == 1 and main.result.depth is not None:
         v = views[0]
-        views.append(LightView(f"{main.method} at infinity", "envmap", v.radiance, None, v.transform, v.bsdfs))
+        views.append(LightView(f"{main.method} at infinity", Light(v.light.radiance, None, "envmap", v.light.frame),
+                               v.transform, v.bsdfs))
     rows = []
     for v in views:
         rows.append((v.name, render_probes(v, main.geometry.objects, sites, main.geometry.intrinsics,

@@ -18,8 +18,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import torch
 
+from roomlight.errors import RoomlightError
+from roomlight.light import Light
 from roomlight.photo.geometry import SceneTransform
 from roomlight.photo.unproject import ObjectMesh
 
@@ -89,18 +90,24 @@ class LightView:
 
     Attributes:
         name: the row's title (e.g. the method).
-        kind: ``mesh`` or ``envmap``.
-        radiance: (H, W, 3) linear; depth: (H, W) metres or None.
-        transform: camera frame -> this light's room frame.
+        light: the light (radiance (H, 2H, 3) linear, depth (H, 2H) metres or None, ``mesh`` or
+            ``envmap``); its frame is camera frame -> its room frame.
+        transform: that frame as the fit's parts (rotation, scale, translation), with which the
+            objects, probes and camera are placed.
         bsdfs: the objects' BSDF dicts by label.
+
+    Raises:
+        RoomlightError: the light's frame is not ``transform``.
     """
 
     name: str
-    kind: str
-    radiance: torch.Tensor
-    depth: torch.Tensor | None
+    light: Light
     transform: SceneTransform
     bsdfs: dict
+
+    def __post_init__(self):
+        if not np.allclose(self.light.frame, self.transform.matrix):
+            raise RoomlightError(f"probes row {self.name!r}: the light's frame is not its camera-to-room transform")
 
 
 #: A close-up's half field of view is this times the probe's angular radius.
@@ -150,9 +157,9 @@ def render_probes(view: LightView, objects: list[ObjectMesh], sites: list[ProbeS
             extra[f"probe_{k}"] = {"type": "sphere", "center": t.points(np.asarray(s.center)).tolist(),
                                    "radius": float(s.radius * t.scale), "bsdf": material(mat)}
         sensor = photo_sensor(intrinsics, t) if frame and n == 0 else None
-        es = EmitterScene(view.kind, tuple(view.radiance.shape[:2]), objects=extra, sensor=sensor,
+        es = EmitterScene(view.light.kind, tuple(view.light.radiance.shape[:2]), objects=extra, sensor=sensor,
                           integrator={"type": "path", "max_depth": int(max_depth)})
-        es.set_emitter(view.radiance, view.depth)
+        es.set_emitter(view.light.radiance, view.light.depth)
         if sensor is not None:
             out["frame"] = es.render(spp=spp, seed=seed).numpy()
         shots = []

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from roomlight.photo.camera import Intrinsics
+from roomlight.photo.camera import PhotoCamera
 from roomlight.photo.geometry import SceneTransform
 from roomlight.photo.materials import object_id
 from roomlight.photo.unproject import ObjectMesh
@@ -26,7 +26,7 @@ def object_shapes(objects: list[ObjectMesh], transform: SceneTransform, bsdfs: d
     return {object_id(o.label): object_shape(o, transform, bsdfs.get(o.label)) for o in objects}
 
 
-def photo_sensor(intrinsics: Intrinsics, transform: SceneTransform) -> dict:
+def photo_sensor(intrinsics: PhotoCamera, transform: SceneTransform) -> dict:
     """The photograph's camera as a Mitsuba sensor dict in the room frame (box pixel filter)."""
     from roomlight.render.camera import pinhole_sensor
 

@@ -66,7 +66,7 @@ def photo_partial_panorama(case, resolution: tuple[int, int]):
 
     k = case.intrinsics
     aspect = case.width / case.height
-    h, w = lift_resolution(k.fov_deg, aspect, resolution[1])
+    h, w = lift_resolution(k.fov_x, aspect, resolution[1])
     if w >= case.width:
         h, w = case.height, case.width
     k_lift = k.scaled(w, h)

@@ -22,7 +22,7 @@ import numpy as np
 import torch
 
 from roomlight.errors import RoomlightError
-from roomlight.photo.camera import Intrinsics, camera_rotation
+from roomlight.photo.camera import PhotoCamera, camera_rotation
 from roomlight.photo.geometry import SceneTransform
 from roomlight.render.materials import principled_bsdf
 from roomlight.render.mesh import mitsuba_mesh
@@ -56,7 +56,7 @@ class SyntheticObject:
                 "metallic": float(self.metallic)}
 
 
-def render_photo(radiance: torch.Tensor, depth: torch.Tensor, objects: list[SyntheticObject], intrinsics: Intrinsics,
+def render_photo(radiance: torch.Tensor, depth: torch.Tensor, objects: list[SyntheticObject], intrinsics: PhotoCamera,
                  origin=(0.0, 0.0, 0.0), pitch_deg: float = 0.0, roll_deg: float = 0.0, spp: int = 256,
                  seed: int = 0, max_depth: int = 4) -> dict[str, np.ndarray]:
     """Render a photograph of ``objects`` lit by the room (radiance (H, W, 3), radial depth (H, W)).
@@ -115,7 +115,7 @@ def _scaled_to_key(shot: dict, radiance: torch.Tensor, key: float) -> tuple[dict
 
 
 def render_photo_case(folder, radiance: torch.Tensor, depth: torch.Tensor, objects: list[SyntheticObject],
-                      intrinsics: Intrinsics, origin=(0.0, 0.0, 0.0), pitch_deg: float = 0.0, roll_deg: float = 0.0,
+                      intrinsics: PhotoCamera, origin=(0.0, 0.0, 0.0), pitch_deg: float = 0.0, roll_deg: float = 0.0,
                       spp: int = 256, seed: int = 0, depth_kind: str = "radial",
                       object_key: float | None = None) -> dict[str, Path]:
     """Render a photograph (:func:`render_photo`) and write it as a photo case folder with ``truth/``.
@@ -194,6 +194,6 @@ def example_photo_case(folder, width: int = 320, height: int = 240, fov_deg: flo
         v, f = builtin_shape(shape)
         objects.append(SyntheticObject(label, v.astype(np.float64) * radius + np.asarray(centre), f.astype(np.int64),
                                        albedo, rough, metal))
-    intr = Intrinsics.from_fov(fov_deg, width, height)
+    intr = PhotoCamera.from_fov(fov_deg, width, height)
     return render_photo_case(folder, radiance, depth, objects, intr, pitch_deg=pitch_deg, spp=spp, seed=seed,
                              depth_kind=depth_kind, object_key=key)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from roomlight.errors import RoomlightError
-from roomlight.photo.camera import Intrinsics
+from roomlight.photo.camera import PhotoCamera
 
 __all__ = ["DEPTH_KINDS", "unproject", "radial_distance", "ImageMesh", "image_mesh", "ObjectMesh", "object_mesh",
            "vertex_normals"]
@@ -25,7 +25,7 @@ __all__ = ["DEPTH_KINDS", "unproject", "radial_distance", "ImageMesh", "image_me
 DEPTH_KINDS = ("z", "radial")
 
 
-def unproject(depth: np.ndarray, intrinsics: Intrinsics, kind: str = "z") -> np.ndarray:
+def unproject(depth: np.ndarray, intrinsics: PhotoCamera, kind: str = "z") -> np.ndarray:
     """Camera-frame points of every pixel centre.
 
     Args:
@@ -46,7 +46,7 @@ def unproject(depth: np.ndarray, intrinsics: Intrinsics, kind: str = "z") -> np.
     return rays * d[..., None]
 
 
-def radial_distance(depth: np.ndarray, intrinsics: Intrinsics, kind: str = "z") -> np.ndarray:
+def radial_distance(depth: np.ndarray, intrinsics: PhotoCamera, kind: str = "z") -> np.ndarray:
     """(H, W) distance of each pixel's point from the camera centre, metres."""
     return np.linalg.norm(unproject(depth, intrinsics, kind), axis=-1)
 
@@ -82,7 +82,7 @@ class ImageMesh:
         return self.points.reshape(-1, 3)
 
 
-def image_mesh(depth: np.ndarray, intrinsics: Intrinsics, kind: str = "z", edge_tolerance: float = 0.05) -> ImageMesh:
+def image_mesh(depth: np.ndarray, intrinsics: PhotoCamera, kind: str = "z", edge_tolerance: float = 0.05) -> ImageMesh:
     """Triangulate the unprojected depth, dropping triangles across depth discontinuities.
 
     A triangle is kept when max(r) <= (1 + edge_tolerance) min(r) over its three vertices' radial

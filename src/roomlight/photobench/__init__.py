@@ -1,7 +1,7 @@
 """The photo benchmark: rendered photographs of procedural rooms, with true light transport as ground truth.
 
-- :mod:`~roomlight.photobench.camera`    the pinhole camera (intrinsics, pose, pitch and roll)
-- :mod:`~roomlight.photobench.tracing`   path-traced images, z-depth and coverage through that camera
+- :mod:`~roomlight.photobench.tracing`   path-traced images, z-depth and coverage through a
+  :class:`~roomlight.photo.camera.PhotoCamera` (intrinsics, pose, pitch and roll)
 - :mod:`~roomlight.photobench.objects`   inserted objects (principled materials) and probe spheres
 - :mod:`~roomlight.photobench.roomscene` one room's Mitsuba scenes, with objects and probes added
 - :mod:`~roomlight.photobench.staging`   where the camera looks and where objects and probes go

@@ -14,8 +14,6 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import numpy as np
-
 from roomlight.errors import RoomlightError
 from roomlight.methods import PHOTO, methods_for
 from roomlight.methods import method as method_record
@@ -63,14 +61,9 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
     fit = fitter_mod.fit_photo(case, method, config, model=model, out_dir=out, progress=progress)
     outputs_mod.write_fit_files(out, fit, case, config)
     (out / fitter_mod.STATE_FILE).unlink(missing_ok=True)  # finished: the outputs are the result
-    t = fit.transform
-    m = np.eye(4)
-    m[:3, :3] = float(t.scale) * np.asarray(t.rotation, np.float64)
-    m[:3, 3] = np.asarray(t.translation, np.float64)
-    r = fit.result
-    return {"radiance": r.radiance.detach().float().cpu().numpy(),
-            "depth": None if r.depth is None else r.depth.detach().float().cpu().numpy(),
-            "emitter_kind": str(fit.fitter.escene.kind), "light_from_camera": m,
+    radiance, depth = fit.result.light.to_numpy()
+    return {"radiance": radiance, "depth": depth,
+            "emitter_kind": str(fit.fitter.escene.kind), "light_from_camera": fit.transform.matrix,
             "materials": {int(e["label"]): {"albedo": e["albedo"], "roughness": e["roughness"],
                                             "metallic": e["metallic"]} for e in fit.materials.to_json()},
             "seconds": float(fit.timings.get("fit", time.perf_counter() - t0))}

@@ -26,7 +26,7 @@ Pixel coordinates have (0, 0) at the image's top-left corner (a centred principa
 (W / 2, H / 2)). The camera frame is x right, y up, looking along -z; ``pitch_deg`` and
 ``roll_deg`` are the camera's tilt relative to the room (the room's yaw is not given: a method
 cannot know it), and ``truth/camera.json`` holds the full pose (see
-:mod:`roomlight.photobench.camera`). Every file is written to a temporary name and renamed.
+:mod:`roomlight.photo.camera`). Every file is written to a temporary name and renamed.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import RoomlightError
-from roomlight.photobench.camera import PhotoCamera
+from roomlight.photo.camera import PhotoCamera
 
 __all__ = ["IMAGE", "DEPTH", "MASK", "CAMERA", "TRUTH", "RECORD", "MATERIALS", "PROBES", "TRUE_DEPTH",
            "PROBE_MASK", "ORACLE", "PREVIEW", "TRUE_CAMERA", "CASE_FORMAT", "CASE_VERSION", "probe_image_name", "write_json", "write_rgb_exr", "read_rgb_exr",
@@ -167,7 +167,7 @@ def camera_json(camera: PhotoCamera) -> dict:
     """The ``camera.json`` mapping of a case: what a method knows of the camera (z-depth, metres)."""
     _, pitch, roll = camera.orientation_deg()
     return {"format": CASE_FORMAT, "version": CASE_VERSION, "width": camera.width, "height": camera.height,
-            "intrinsics": {"fx": camera.fx, "fy": camera.fy, "cx": camera.cx, "cy": camera.cy},
+            "intrinsics": camera.intrinsics_dict(),
             "depth_kind": "z", "pitch_deg": pitch, "roll_deg": roll, "units": "m"}
 
 

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from roomlight.photobench import case as fmt
 
 __all__ = ["CEILING", "CEILING_FIT", "prior_ceiling_light"]
@@ -27,12 +25,13 @@ CEILING_FIT = {"steps": 1500, "init_from_encoder": True, "depth_weight": 3.0, "p
 
 
 def prior_ceiling_light(case_dir, model, truth=None):
-    """The prior's best approximation of the case's oracle panorama, as a
-    :class:`~roomlight.photobench.scoring.RecoveredLight` (2.5D) in the oracle's frame."""
+    """The prior's best approximation of the case's oracle panorama, as a 2.5D
+    :class:`~roomlight.light.Light` in the oracle's frame."""
     from roomlight.data.dataset import load_training_pair
     from roomlight.errors import RoomlightError
     from roomlight.fit.latent import LatentFitConfig, fit_latent
-    from roomlight.photobench.scoring import RecoveredLight, oracle_light
+    from roomlight.light import Light
+    from roomlight.photobench.scoring import oracle_light
 
     if model is None:
         raise RoomlightError(f"{CEILING} needs a prior (--model)")
@@ -40,6 +39,5 @@ def prior_ceiling_light(case_dir, model, truth=None):
     rad, dep, info = load_training_pair(Path(case_dir) / fmt.ORACLE, model.config.resolution, calibrate=True)
     device = next(model.parameters()).device
     res = fit_latent(model, rad[None].to(device), dep[None].to(device), LatentFitConfig(**CEILING_FIT))
-    radiance = (res.radiance[0] * float(info["exposure_factor"])).permute(1, 2, 0).cpu().numpy()
-    depth = res.depth[0, 0].cpu().numpy()
-    return RecoveredLight(radiance.astype(np.float32), depth.astype(np.float32), "mesh", oracle.light_from_camera)
+    radiance = (res.radiance[0] * float(info["exposure_factor"])).permute(1, 2, 0)
+    return Light(radiance, res.depth[0, 0], "mesh", oracle.frame)

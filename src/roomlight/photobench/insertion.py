@@ -147,40 +147,35 @@ NAIVE = "naive-paste"
 
 def naive_light(case_dir, tau: float = 0.99):
     """A uniform env map of the photograph's mean unsaturated colour (the naive paste's light)."""
+    from roomlight.light import Light
     from roomlight.photobench import case as fmt
-    from roomlight.photobench.scoring import RecoveredLight
 
     img = fmt.read_rgb_exr(Path(case_dir) / fmt.IMAGE)
     keep = img.max(-1) < tau
     colour = (img[keep] if keep.any() else img.reshape(-1, 3)).mean(0)
-    return RecoveredLight(np.broadcast_to(colour.astype(np.float32), (16, 32, 3)).copy(), None, "envmap", np.eye(4))
+    return Light(np.broadcast_to(colour.astype(np.float32), (16, 32, 3)), None, "envmap")
 
 
 def composite_for_light(case_dir, light, materials: dict, objects: list[InsertedObject], camera, preset: str = "fast",
                         overrides: dict | None = None, spp: int = 64, local_scene: bool = True) -> np.ndarray:
-    """The new objects composited into the photo under ``light`` (a scoring ``RecoveredLight``) by
-    ``roomlight insert``'s differential rendering, at the photo's size: (H, W, 3) float32 linear.
+    """The new objects composited into the photo under ``light`` (a :class:`~roomlight.light.Light` whose
+    frame is light-from-camera) by ``roomlight insert``'s differential rendering, at the photo's size:
+    (H, W, 3) float32 linear.
 
     Args:
         materials: the local scene's objects' materials by label ({albedo, roughness, metallic}).
         objects: the new objects (world frame); camera: the photo's ``PhotoCamera``.
     """
-    import torch
-
     from roomlight.insert.composite import composite_objects
     from roomlight.insert.fitted import FittedPhoto
     from roomlight.insert.objects import InsertSpec, PlacedObject
     from roomlight.photo.case import load_photo
     from roomlight.photo.config import photo_config
     from roomlight.photo.geometry import SceneTransform
-    from roomlight.photobench.scoring import similarity_parts
 
     config = photo_config(preset, **dict(overrides or {}))
     case = load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
-    s, r, t = similarity_parts(np.asarray(light.light_from_camera, np.float64), "light frame")
-    fitted = FittedPhoto(Path(case_dir), "light", case, config, SceneTransform(r, s, t), light.kind,
-                         torch.from_numpy(np.ascontiguousarray(light.radiance, np.float32)),
-                         None if light.depth is None else torch.from_numpy(np.ascontiguousarray(light.depth, np.float32)),
+    fitted = FittedPhoto(Path(case_dir), "light", case, config, light, SceneTransform.from_matrix(light.frame),
                          {int(k): dict(v) for k, v in materials.items()})
     world_to_cam = np.linalg.inv(np.asarray(camera.matrix, np.float64))
     placed = []

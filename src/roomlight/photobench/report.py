@@ -122,13 +122,14 @@ def outside_counts(results: list[dict]) -> dict:
 def _outside_from_files(r: dict) -> dict:
     from roomlight.io import read_panorama
     from roomlight.photobench.runner import REFERENCES
-    from roomlight.photobench.scoring import RecoveredLight, load_truth, probes_outside
+    from roomlight.light import Light
+    from roomlight.photobench.scoring import load_truth, probes_outside
 
     path = Path(r["_dir"]) / "recovered.exr"
     if r.get("emitter_kind") != "mesh" or not path.is_file():
         return {}
     pano = read_panorama(path)
-    light = RecoveredLight(pano.radiance, pano.depth, "mesh", np.asarray(pano.metadata["light_from_camera"]))
+    light = Light(pano.radiance, pano.depth, "mesh", pano.metadata["light_from_camera"])
     return probes_outside(load_truth(r["case_dir"]), light, given_depth=r["method"] not in REFERENCES)
 
 

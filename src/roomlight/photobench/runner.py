@@ -36,18 +36,17 @@ import time
 from functools import partial
 from pathlib import Path
 
-import numpy as np
-
 from roomlight.errors import RoomlightError
 from roomlight.evaluate.records import RESULT, RUN_FILE, check_run_file, write_json
 from roomlight.evaluate.runner import Case, RunSummary, run_cases, shard_cases
+from roomlight.light import Light
 from roomlight.methods import PHOTO, check_methods, default_run, methods_for
 from roomlight.methods import method as method_record
 from roomlight.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.photobench.ceiling import CEILING, prior_ceiling_light
 from roomlight.photobench.insertion import NAIVE
 from roomlight.photobench.builder import read_photo_manifest
-from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, RecoveredLight, load_truth, material_errors, oracle_light,
+from roomlight.photobench.scoring import (SCORE_MAX_DEPTH, load_truth, material_errors, oracle_light,
                                           probes_outside,
                                           score_light)
 
@@ -74,13 +73,11 @@ def list_photo_cases(bench_dir, methods, shard=(0, 1)) -> list[Case]:
     return shard_cases([Case(p["id"], m, bench / p["case"]) for p in manifest["photos"] for m in methods], shard)
 
 
-def _recovered(fit: dict) -> RecoveredLight:
+def _recovered(fit: dict) -> Light:
     for key in ("radiance", "emitter_kind", "light_from_camera"):
         if key not in fit:
             raise RoomlightError(f"the fit returned no {key!r}")
-    depth = fit.get("depth")
-    return RecoveredLight(np.asarray(fit["radiance"], np.float32), None if depth is None else np.asarray(depth, np.float32),
-                          str(fit["emitter_kind"]), np.asarray(fit["light_from_camera"], np.float64))
+    return Light(fit["radiance"], fit.get("depth"), str(fit["emitter_kind"]), fit["light_from_camera"])
 
 
 def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_spp: int = DEFAULT_EVAL_SPP,
@@ -118,8 +115,8 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
         materials = material_errors(truth.materials, out.get("materials") or {})
         fit_seconds = float(out.get("seconds", time.perf_counter() - t0))
     wall = time.perf_counter() - t0
-    write_panorama(cdir / "recovered.exr", (light.radiance, light.depth), half=False,
-                   metadata={"emitter_kind": light.kind, "light_from_camera": np.asarray(light.light_from_camera).tolist()})
+    write_panorama(cdir / "recovered.exr", light.to_numpy(), half=False,
+                   metadata={"emitter_kind": light.kind, "light_from_camera": light.frame.tolist()})
     t1 = time.perf_counter()
     renders: dict = {}
     scores = score_light(truth, light, eval_spp, renders=renders, given_depth=case.method not in REFERENCES)

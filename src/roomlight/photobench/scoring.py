@@ -1,10 +1,11 @@
 """Scoring a recovered light on a photo: the probes re-rendered under it against the true probes.
 
-A method returns a light (a 2.5D area light, an env map or a sphere proxy: radiance (H, W, 3),
-depth (H, W) or none, its kind) in its own frame -- centred on the light's capture point, with
-the panorama's axes -- and where the photographed scene sits in that frame:
-``light_from_camera``, the similarity p_light = s R p_camera + t (a fit may express the room in
-other units than the depth map's metres, hence s). Rendering is unchanged by a uniform
+A method returns a :class:`~roomlight.light.Light` (a 2.5D area light, an env map or a sphere
+proxy: radiance (H, W, 3), depth (H, W) or none, its kind) in its own frame -- centred on the
+light's capture point, with the panorama's axes -- and where the photographed scene sits in that
+frame: its ``frame``, the similarity p_light = s R p_camera + t from the photo's camera frame
+(recorded as ``light_from_camera``; a fit may express the room in other units than the depth
+map's metres, hence s). Rendering is unchanged by a uniform
 scale of the whole scene, so the probes are rendered in the light's frame:
 
 - the probe spheres (every probe of the photo, centres and radii from ``truth/probes.json``
@@ -45,12 +46,13 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import RoomlightError
+from roomlight.light import Light, similarity_parts
+from roomlight.photo.camera import PhotoCamera
 from roomlight.photobench import case as fmt
-from roomlight.photobench.camera import PhotoCamera
 from roomlight.photobench.objects import PROBE_MATERIALS, InsertedObject, PrincipledMaterial, ProbeSphere
 
-__all__ = ["SCORE_MAX_DEPTH", "SCORE_SEED", "MATERIAL_METRICS", "RecoveredLight", "PhotoTruth", "load_truth",
-           "oracle_light", "similarity_parts", "render_probes", "score_light", "material_errors"]
+__all__ = ["SCORE_MAX_DEPTH", "SCORE_SEED", "MATERIAL_METRICS", "PhotoTruth", "load_truth", "oracle_light",
+           "similarity_parts", "render_probes", "score_light", "material_errors"]
 
 #: Longest light path of the scoring renders (the paper's renders: 4).
 SCORE_MAX_DEPTH = 4
@@ -59,24 +61,6 @@ SCORE_SEED = 7_000_001 + (1 << 30)
 #: Material errors per object (all lower-is-better): RMSE of the linear RGB albedo, absolute
 #: roughness error, absolute metallic error.
 MATERIAL_METRICS = ("albedo_rmse", "roughness_error", "metallic_error")
-
-
-@dataclass
-class RecoveredLight:
-    """A light in its own frame and where the photo's camera frame sits in it.
-
-    Attributes:
-        radiance: (H, W, 3) float32 linear radiance (the photo's exposure), W = 2H.
-        depth: (H, W) float32 radial depth in the light's units, or None (env map, sphere proxy).
-        kind: ``mesh``, ``envmap`` or ``sphere:R``.
-        light_from_camera: (4, 4) similarity, camera frame (x right, y up, -z forward, metres) ->
-            light frame (origin: the panorama's centre; axes: the panorama's): p_light = s R p_camera + t.
-    """
-
-    radiance: np.ndarray
-    depth: np.ndarray | None
-    kind: str
-    light_from_camera: np.ndarray
 
 
 @dataclass
@@ -143,22 +127,7 @@ def _sample_map(a: np.ndarray, xy: np.ndarray) -> np.ndarray:
     return ((1 - fy) * ((1 - fx) * a[y0, x0] + fx * a[y0, x1]) + fy * ((1 - fx) * a[y1, x0] + fx * a[y1, x1]))
 
 
-def similarity_parts(m: np.ndarray, what: str = "light_from_camera") -> tuple[float, np.ndarray, np.ndarray]:
-    """(scale s > 0, rotation R (3, 3), translation t (3,)) of a 4 x 4 similarity s R | t; refuses others."""
-    m = np.asarray(m, np.float64)
-    if m.shape != (4, 4) or not np.isfinite(m).all() or not np.allclose(m[3], [0, 0, 0, 1]):
-        raise RoomlightError(f"{what}: expected a finite 4x4 similarity with last row 0 0 0 1")
-    det = float(np.linalg.det(m[:3, :3]))
-    if det <= 0:
-        raise RoomlightError(f"{what}: its 3x3 part is not a rotation times a positive scale (det {det:.3g})")
-    s = det ** (1.0 / 3.0)
-    r = m[:3, :3] / s
-    if not np.allclose(r.T @ r, np.eye(3), atol=1e-4):
-        raise RoomlightError(f"{what}: its 3x3 part is not a rotation times a uniform scale")
-    return s, r, m[:3, 3].copy()
-
-
-def oracle_light(case_dir, kind: str = "mesh", truth: PhotoTruth | None = None) -> RecoveredLight:
+def oracle_light(case_dir, kind: str = "mesh", truth: PhotoTruth | None = None) -> Light:
     """The oracle light of a case (``truth/oracle.exr``) as a 2.5D area light or (``kind="envmap"``) an env map."""
     from roomlight.io import read_panorama
 
@@ -170,9 +139,7 @@ def oracle_light(case_dir, kind: str = "mesh", truth: PhotoTruth | None = None) 
         raise fmt.PhotoCaseError(f"{d / fmt.ORACLE}: no oracle centre in its metadata")
     light_from_world = np.eye(4)
     light_from_world[:3, 3] = -centre          # world axes, origin at the oracle centre
-    return RecoveredLight(pano.radiance.astype(np.float32),
-                          None if kind == "envmap" else pano.depth.astype(np.float32), kind,
-                          light_from_world @ truth.camera.matrix)
+    return Light(pano.radiance, None if kind == "envmap" else pano.depth, kind, light_from_world @ truth.camera.matrix)
 
 
 def _camera_in_light(camera: PhotoCamera, light_from_world: np.ndarray) -> PhotoCamera:
@@ -183,7 +150,7 @@ def _camera_in_light(camera: PhotoCamera, light_from_world: np.ndarray) -> Photo
     return PhotoCamera(camera.width, camera.height, camera.fx, camera.fy, camera.cx, camera.cy, m)
 
 
-def render_probes(truth: PhotoTruth, light: RecoveredLight, material: str, spp: int = 64, seed: int = SCORE_SEED,
+def render_probes(truth: PhotoTruth, light: Light, material: str, spp: int = 64, seed: int = SCORE_SEED,
                   max_depth: int = SCORE_MAX_DEPTH, given_depth: bool = True) -> np.ndarray:
     """The photo's camera view of the probes (in ``material``) and the true objects under ``light``,
     in the probe window.
@@ -195,29 +162,22 @@ def render_probes(truth: PhotoTruth, light: RecoveredLight, material: str, spp: 
         (h, w, 3) float32 linear radiance of the probe window (the photo's exposure, as the
         light's radiance is).
     """
-    import torch
-
     from roomlight.photobench.tracing import trace_image
     from roomlight.render.scene import EmitterScene
 
     world_to_camera = np.linalg.inv(truth.camera.matrix)
-    light_from_world = np.asarray(light.light_from_camera, np.float64) @ world_to_camera
-    similarity_parts(light_from_world)
-    rad = np.asarray(light.radiance, np.float32)
-    if rad.ndim != 3 or rad.shape[2] != 3 or rad.shape[1] != 2 * rad.shape[0]:
-        raise RoomlightError(f"recovered light: radiance must be (H, 2H, 3), got {rad.shape}")
+    light_from_world = light.seen_from(world_to_camera).frame
 
     def placed(item_id: str) -> np.ndarray:
         f = truth.depth_factors.get(item_id, 1.0) if given_depth else 1.0
         scale = np.diag([f, f, f, 1.0])  # about the camera centre, in the camera frame
-        return np.asarray(light.light_from_camera, np.float64) @ scale @ world_to_camera
+        return light.frame @ scale @ world_to_camera
 
     shapes = {o.id: o.mitsuba_mesh(placed(o.id)) for o in truth.objects}
     shapes.update({p.id: p.mitsuba_shape(material, placed(p.id)) for p in truth.probes})
-    es = EmitterScene(light.kind, rad.shape[:2], objects=shapes,
+    es = EmitterScene(light.kind, tuple(light.radiance.shape[:2]), objects=shapes,
                       integrator={"type": "path", "max_depth": int(max_depth)})
-    depth = None if light.depth is None else torch.from_numpy(np.asarray(light.depth, np.float32))
-    es.set_emitter(torch.from_numpy(rad), depth)
+    es.set_emitter(light.radiance, light.depth)
     from roomlight.render.variant import mitsuba
 
     front = mitsuba().load_dict({"type": "scene", **shapes})
@@ -225,7 +185,7 @@ def render_probes(truth: PhotoTruth, light: RecoveredLight, material: str, spp: 
                        window=truth.window)
 
 
-def score_light(truth: PhotoTruth, light: RecoveredLight, spp: int = 64, seed: int = SCORE_SEED,
+def score_light(truth: PhotoTruth, light: Light, spp: int = 64, seed: int = SCORE_SEED,
                 renders: dict | None = None, given_depth: bool = True) -> dict:
     """Scores of ``light`` on every probe material: ``{material: {metrics..., "per_probe": {label: metrics}}}``.
 
@@ -257,7 +217,7 @@ def _sphere_points(count: int = 256) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
 
 
-def probes_outside(truth: PhotoTruth, light: RecoveredLight, given_depth: bool = True, points: int = 256) -> dict:
+def probes_outside(truth: PhotoTruth, light: Light, given_depth: bool = True, points: int = 256) -> dict:
     """Per probe (by label), the share of its surface that the 2.5D ``light`` does not enclose, placed as
     :func:`render_probes` places it; an empty dict for a light without depth (an env map). A probe
     outside the light sees the mesh's back faces, which emit nothing, and renders black."""
@@ -269,11 +229,11 @@ def probes_outside(truth: PhotoTruth, light: RecoveredLight, given_depth: bool =
         return {}
     world_to_camera = np.linalg.inv(truth.camera.matrix)
     unit = _sphere_points(points)
-    depth = torch.from_numpy(np.asarray(light.depth, np.float64))
+    depth = light.depth.double()
     out = {}
     for p in truth.probes:
         f = truth.depth_factors.get(p.id, 1.0) if given_depth else 1.0
-        m = np.asarray(light.light_from_camera, np.float64) @ np.diag([f, f, f, 1.0]) @ world_to_camera
+        m = light.frame @ np.diag([f, f, f, 1.0]) @ world_to_camera
         world = np.asarray(p.center, np.float64) + p.radius * unit
         q = world @ m[:3, :3].T + m[:3, 3]
         out[str(p.label)] = outside_share(depth, torch.from_numpy(q))

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from roomlight.errors import RoomlightError
-from roomlight.photobench.camera import PhotoCamera
+from roomlight.photo.camera import PhotoCamera
 from roomlight.photobench.config import PhotoBenchConfig
 from roomlight.photobench.objects import OBJECT_SHAPES, InsertedObject, ProbeSphere, draw_material
 from roomlight.photobench.tracing import trace_coverage

@@ -1,4 +1,4 @@
-"""Tracing a :class:`~roomlight.photobench.camera.PhotoCamera` through a Mitsuba scene.
+"""Tracing a :class:`~roomlight.photo.camera.PhotoCamera` through a Mitsuba scene.
 
 - :func:`trace_image`: path-traced radiance. Each pixel averages ``spp`` rays through points of
   its footprint drawn by a per-pixel stratified sampler (a box pixel filter), traced with the
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from roomlight.errors import RoomlightError
-from roomlight.photobench.camera import PhotoCamera
+from roomlight.photo.camera import PhotoCamera
 from roomlight.render.raycast import shape_coverage
 from roomlight.render.variant import mitsuba
 

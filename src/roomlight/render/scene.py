@@ -18,13 +18,13 @@ import torch
 
 from roomlight.emitter.area_light import area_light_topology, area_light_vertices
 from roomlight.emitter.envmap import envmap_data, envmap_rows
-from roomlight.emitter.kind import EmitterKind, parse_emitter_kind
 from roomlight.emitter.sphere import sphere_depth
 from roomlight.errors import RoomlightError, ShapeError
+from roomlight.light import EmitterKind, parse_emitter_kind
 from roomlight.render.tensors import from_mitsuba_tensor, to_mitsuba_tensor
 from roomlight.render.variant import mitsuba
 
-# EmitterKind and parse_emitter_kind live in roomlight.emitter.kind; re-exported for old imports.
+# EmitterKind and parse_emitter_kind live in roomlight.light; re-exported for old imports.
 __all__ = ["EmitterScene", "EMITTER_ID", "EMITTER_BSDF", "EmitterKind", "parse_emitter_kind"]
 
 EMITTER_ID = "emitter"

@@ -26,7 +26,7 @@ import torch
 
 from roomlight.color import LOG_EPS, luminance_torch
 from roomlight.geometry.equirect import sample_equirect
-from roomlight.photo.camera import Intrinsics, camera_rotation
+from roomlight.photo.camera import PhotoCamera, camera_rotation
 
 __all__ = ["CropSpec", "crop_rotation", "cut_view", "random_crop_spec", "occluder_mask", "expose"]
 
@@ -43,8 +43,8 @@ class CropSpec:
     yaw_deg: float = 0.0
 
     @property
-    def intrinsics(self) -> Intrinsics:
-        return Intrinsics.from_fov(self.fov_deg, self.width, self.height)
+    def intrinsics(self) -> PhotoCamera:
+        return PhotoCamera.from_fov(self.fov_deg, self.width, self.height)
 
 
 def crop_rotation(spec: CropSpec) -> np.ndarray:
