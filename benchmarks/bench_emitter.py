@@ -29,13 +29,13 @@ def main():
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args()
 
-    from roomlight.emitter.area_light import area_light_topology, build_area_light
-    from roomlight.examples import example_room
-    from roomlight.render.bridge import render_differentiable
-    from roomlight.render.camera import perspective_sensor
-    from roomlight.render.materials import material
-    from roomlight.render.scene import EmitterScene
-    from roomlight.render.variant import ensure_variant
+    from roomlight.core.emitter.area_light import area_light_topology, build_area_light
+    from roomlight.core.examples import example_room
+    from roomlight.core.render.bridge import render_differentiable
+    from roomlight.core.render.camera import perspective_sensor
+    from roomlight.core.render.materials import material
+    from roomlight.core.render.scene import EmitterScene
+    from roomlight.core.render.variant import ensure_variant
 
     variant = ensure_variant()
     rows = []

@@ -25,10 +25,10 @@ import torch
 
 
 def build_scene(root: Path, width: int, height: int):
-    from roomlight.bench.builder import BenchConfig, make_benchmark, read_manifest
-    from roomlight.examples import example_room
-    from roomlight.io import write_panorama
-    from roomlight.scene import load_scene
+    from roomlight.evaluation.bench.builder import BenchConfig, make_benchmark, read_manifest
+    from roomlight.core.examples import example_room
+    from roomlight.core.io import write_panorama
+    from roomlight.fitting.scene import load_scene
 
     panos = root / "panos"
     panos.mkdir(parents=True, exist_ok=True)
@@ -43,7 +43,7 @@ def build_scene(root: Path, width: int, height: int):
 
 
 def time_method(scene, method, model, spp, iterations, crop=True):
-    from roomlight.inverse import FitConfig, build_fitter, make_light
+    from roomlight.fitting.inverse import FitConfig, build_fitter, make_light
 
     cfg = FitConfig(iterations=iterations + 1, spp=spp, eval_every=10**9, crop_to_mask=crop)
     light = make_light(method, scene, cfg, model)
@@ -64,8 +64,8 @@ def main():
                     help="also time every method rendering the whole frame (crop_to_mask=False)")
     args = ap.parse_args()
 
-    from roomlight.model import ModelConfig, Normalization, PanoVAE
-    from roomlight.render.variant import ensure_variant
+    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
+    from roomlight.core.render.variant import ensure_variant
 
     variant = ensure_variant()
     torch.manual_seed(0)

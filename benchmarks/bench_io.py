@@ -21,7 +21,7 @@ def main():
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
 
-    from roomlight.io import read_hdr, write_hdr
+    from roomlight.core.io import read_hdr, write_hdr
 
     rng = np.random.default_rng(1234)
     h, w = 1024, 2048

@@ -48,8 +48,8 @@ def literal_blocks():
     followed by a separate scale and shift."""
     import torch.nn.functional as F
 
-    from roomlight.geometry.padding import spherical_pad
-    from roomlight.model import blocks
+    from roomlight.core.geometry.padding import spherical_pad
+    from roomlight.prior.model import blocks
 
     def literal_adagn(self, x, z):
         scale, shift = self.to_scale_shift(z).chunk(2, dim=1)
@@ -94,7 +94,7 @@ def cpu_has_native_bf16() -> bool:
 
 
 def make_model(preset: str, device: str):
-    from roomlight.model import Normalization, PanoVAE, get_preset
+    from roomlight.prior.model import Normalization, PanoVAE, get_preset
 
     torch.manual_seed(0)
     norm = Normalization(mean=(0.9, 0.8, 0.5, 1.0), std=(0.6, 0.6, 0.55, 0.45))
@@ -111,8 +111,8 @@ def fake_batch(model, batch: int, device: str):
 
 def train_step_fn(model, batch: int, device: str, amp: bool, channels_last: bool = False):
     """A closure running one full training step (the Trainer's arithmetic, without data loading)."""
-    from roomlight.data import augment_batch
-    from roomlight.losses import vae_loss
+    from roomlight.prior.data import augment_batch
+    from roomlight.prior.losses import vae_loss
 
     opt = torch.optim.AdamW(model.parameters(), lr=2e-4, betas=(0.9, 0.99), weight_decay=0.01)
     rad, dep = fake_batch(model, batch, device)
@@ -149,7 +149,7 @@ def train_step_fn(model, batch: int, device: str, amp: bool, channels_last: bool
 def autograd_padding():
     """Temporarily differentiate spherical padding by autograd through its slice copies (the
     code before the hand-written adjoint)."""
-    from roomlight.geometry import padding
+    from roomlight.core.geometry import padding
 
     saved = padding._SphericalPadFunction.apply
     padding._SphericalPadFunction.apply = lambda x, pad: padding._pad_forward(x, pad)

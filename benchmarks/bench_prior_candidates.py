@@ -43,7 +43,7 @@ from bench_model import median_time  # noqa: E402  (warm-up, then the median of 
 
 
 def make_model(name: str):
-    from roomlight.model import ModelConfig, Normalization, PanoVAE, get_preset
+    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE, get_preset
 
     preset, overrides = CANDIDATES[name]
     cfg = get_preset(preset).override(**overrides) if overrides else get_preset(preset)
@@ -75,7 +75,7 @@ def latent_fit_ms(model, repeats: int, batch: int = 16) -> float:
 
 
 def training_rate(model, repeats: int, batch: int = 32) -> float:
-    from roomlight.losses import vae_loss
+    from roomlight.prior.losses import vae_loss
 
     h, w = model.config.resolution
     rad = torch.rand(batch, 3, h, w) * 4
@@ -115,7 +115,7 @@ def main():
     if unknown:
         ap.error(f"unknown candidates {unknown}; choose from {', '.join(CANDIDATES)}")
     if not args.no_scene_fit:
-        from roomlight.render.variant import ensure_variant
+        from roomlight.core.render.variant import ensure_variant
 
         ensure_variant()
     print(f"torch threads {torch.get_num_threads()}, medians of {args.repeats}")

@@ -49,15 +49,15 @@ def lum(x):
 
 def render(room, sampler, depth, spp, denoise, height, seed):
     """End-to-end for one configuration (scene build included); returns (radiance, seconds)."""
-    from roomlight.synth.camera import render_aovs, render_depth, render_radiance
-    from roomlight.synth.scene import build_scene
+    from roomlight.datagen.synth.camera import render_aovs, render_depth, render_radiance
+    from roomlight.datagen.synth.scene import build_scene
 
     t0 = time.perf_counter()
     scene = build_scene(room, max_depth=depth)
     rad = render_radiance(scene, room.capture, height, spp=spp, seed=seed, yaw=room.yaw, sampler=sampler)
     render_depth(scene, room.capture, height, yaw=room.yaw)
     if denoise:
-        from roomlight.synth.denoise import denoise_panorama
+        from roomlight.datagen.synth.denoise import denoise_panorama
 
         albedo, normal, emitter = render_aovs(scene, room.capture, height, spp=min(16, spp), seed=seed, yaw=room.yaw)
         rad = denoise_panorama(rad, albedo, normal, emitter)
@@ -71,12 +71,12 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=4096)
     args = ap.parse_args()
 
-    from roomlight.io.panorama import exposure_calibrate
-    from roomlight.render.variant import ensure_variant
-    from roomlight.synth.camera import render_radiance
-    from roomlight.synth.denoise import denoise_available
-    from roomlight.synth.rooms import generate_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.core.io.panorama import exposure_calibrate
+    from roomlight.core.render.variant import ensure_variant
+    from roomlight.datagen.synth.camera import render_radiance
+    from roomlight.datagen.synth.denoise import denoise_available
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.datagen.synth.scene import build_scene
 
     variant = ensure_variant()
     configs = [c for c in CONFIGS if not c[4] or denoise_available()]

@@ -16,7 +16,7 @@ alone (process start and model loading excluded).
 "Load arriving later" runs ``--phases`` fits in one process that chose its threads on an idle
 machine; the busy processes start after the first phase. ``start only`` keeps the choice made at the
 start; ``re-checked`` measures the load again before each phase
-(:func:`roomlight.render.variant.recheck_threads`, as the long commands do between their cases and
+(:func:`roomlight.core.render.variant.recheck_threads`, as the long commands do between their cases and
 validations). Its times are the median over the phases after the load arrived.
 
 Run: .venv/bin/python benchmarks/bench_threads.py [--steps 100] [--repeats 3] [--busy 1] [--phases 5]
@@ -38,9 +38,9 @@ from pathlib import Path
 LOAD_AND_WARM_UP = r"""
 import torch
 from roomlight.demo import bundled_prior_path
-from roomlight.examples import example_room
-from roomlight.fit import LatentFitConfig, fit_latent
-from roomlight.model import PanoVAE
+from roomlight.core.examples import example_room
+from roomlight.prior.latent_fit import LatentFitConfig, fit_latent
+from roomlight.prior.model import PanoVAE
 
 model = PanoVAE.from_pretrained(bundled_prior_path())
 h, w = model.config.resolution
@@ -75,7 +75,7 @@ if os.environ.get("BENCH_POLICY") == "recheck":
     os.environ["ROOMLIGHT_THREADS_AUTO"] = "1"
 apply_thread_policy()
 """ + LOAD_AND_WARM_UP + r"""
-from roomlight.render.variant import recheck_threads
+from roomlight.core.render.variant import recheck_threads
 for phase in range(int(sys.argv[2])):
     if phase:
         time.sleep(0.5)  # the parent starts the busy processes after the first phase

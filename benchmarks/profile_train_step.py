@@ -45,7 +45,7 @@ def family(name: str) -> str:
 
 def loader_seconds(data: str, preset: str, batch: int, batches: int = 8) -> float | None:
     """Median seconds per batch of the training loader over the packed cache (None without data)."""
-    from roomlight.train import Trainer, get_train_preset
+    from roomlight.prior.train import Trainer, get_train_preset
 
     if not data or not Path(data).is_dir():
         return None
@@ -56,7 +56,7 @@ def loader_seconds(data: str, preset: str, batch: int, batches: int = 8) -> floa
         t = Trainer(cfg, data, tmp, device="cpu", note=lambda m: None)
         from torch.utils.data import DataLoader
 
-        from roomlight.data import collate_panoramas
+        from roomlight.prior.data import collate_panoramas
 
         loader = DataLoader(t.train_set, batch_sampler=t.sampler, collate_fn=collate_panoramas, num_workers=0)
         it, times = iter(loader), []

@@ -31,10 +31,10 @@ from pathlib import Path
 import torch
 
 from roomlight.errors import RoomlightError
-from roomlight.model.families import load_model
-from roomlight.model.saved import CONFIG_NAME, WEIGHTS_NAME
-from roomlight.model.runs import resolve_run_model
-from roomlight.model.weights import file_sha256
+from roomlight.prior.model.families import load_model
+from roomlight.prior.model.saved import CONFIG_NAME, WEIGHTS_NAME
+from roomlight.prior.model.runs import resolve_run_model
+from roomlight.prior.model.weights import file_sha256
 
 
 def _best_step(model_dir: Path) -> int | None:

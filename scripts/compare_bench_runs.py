@@ -21,14 +21,14 @@ from pathlib import Path
 def _records(res: Path, suffix: str = "") -> tuple[list[dict], list[dict] | None, list[dict] | None]:
     """(probe or scene records, material records or None, inserted-object records or None) of a results folder."""
     if (res / "run.json").is_file() and json.loads((res / "run.json").read_text()).get("kind") == "photos":
-        from roomlight.photobench.report import (collect_photo_results, insertion_records, material_records,
+        from roomlight.evaluation.photobench.report import (collect_photo_results, insertion_records, material_records,
                                                  probe_records)
 
         results = collect_photo_results(res)
         for r in results:
             r["method"] += suffix
         return probe_records(results), material_records(results), insertion_records(results)
-    from roomlight.bench.report import collect_results
+    from roomlight.evaluation.bench.report import collect_results
 
     recs = collect_results(res)
     for r in recs:
@@ -45,7 +45,7 @@ def main(argv=None) -> None:
     ap.add_argument("--view", default="eval", help="synthetic benchmark view: eval (the probe) or input")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    from roomlight.evaluate.paired import paired_differences, paired_markdown
+    from roomlight.evaluation.harness.paired import paired_differences, paired_markdown
     from roomlight.errors import RoomlightError
 
     try:
@@ -59,7 +59,7 @@ def main(argv=None) -> None:
     md = [f"## {method} (from {args.other}) against each method of {args.base}, view {view}", "",
           paired_markdown(paired, method)]
     if base_mat is not None and other_mat is not None:
-        from roomlight.photobench.scoring import MATERIAL_METRICS
+        from roomlight.evaluation.photobench.scoring import MATERIAL_METRICS
 
         higher = {k: False for k in MATERIAL_METRICS}
         pm = paired_differences(base_mat + other_mat, method, "materials", metrics=MATERIAL_METRICS,
@@ -67,7 +67,7 @@ def main(argv=None) -> None:
         md += ["## The recovered materials", "",
                paired_markdown(pm, method, ["objects"], {k: f"Δ {k}" for k in MATERIAL_METRICS}, note=False)]
     if base_ins and other_ins:
-        from roomlight.photobench.report import INSERT_LABELS, INSERT_METRICS
+        from roomlight.evaluation.photobench.report import INSERT_LABELS, INSERT_METRICS
 
         pi = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(INSERT_METRICS),
                                 higher_is_better=INSERT_METRICS)

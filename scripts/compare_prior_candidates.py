@@ -55,7 +55,7 @@ def measure_rates(names: list[str], path: Path) -> dict[str, float]:
     """Training panoramas/s of each candidate (cached in ``path``)."""
     from bench_prior_candidates import training_rate
 
-    from roomlight.model import Normalization, PanoVAE, get_preset
+    from roomlight.prior.model import Normalization, PanoVAE, get_preset
     import torch
 
     rates = json.loads(path.read_text()) if path.exists() else {}

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from roomlight.errors import RoomlightError
-from roomlight.eval.compare import compare_reports, comparison_markdown
+from roomlight.prior.eval.compare import compare_reports, comparison_markdown
 
 
 def _load(paths: str) -> dict:

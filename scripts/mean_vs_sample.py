@@ -45,9 +45,9 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0)
     args = p.parse_args(argv)
 
-    from roomlight.model.families import is_veni
-    from roomlight.model.runs import load_run_model
-    from roomlight.viewenc.trainer import load_panoramas
+    from roomlight.prior.model.families import is_veni
+    from roomlight.prior.model.runs import load_run_model
+    from roomlight.prior.viewenc.trainer import load_panoramas
 
     try:
         model = load_run_model(args.model, device="cpu").eval()

@@ -24,7 +24,7 @@ MATERIALS = ("diffuse", "matte", "mirror")
 
 
 def _read_rgb(path: Path) -> np.ndarray:
-    from roomlight.io import read_exr
+    from roomlight.core.io import read_exr
 
     channels = read_exr(path)
     return np.stack([channels[c] for c in "RGB"], axis=-1)
@@ -32,8 +32,8 @@ def _read_rgb(path: Path) -> np.ndarray:
 
 def brightness_table(results: Path, methods: list[str]) -> dict:
     """{method: {"ratio": [recovered/true per photo], "fitted": {material: [psnr]}, "rescaled": {...}}}."""
-    from roomlight.evaluate.metrics import score_view
-    from roomlight.photobench.scoring import load_truth
+    from roomlight.evaluation.harness.metrics import score_view
+    from roomlight.evaluation.photobench.scoring import load_truth
 
     out = {m: {"photos": [], "ratio": [], "fitted": {k: [] for k in MATERIALS},
                "rescaled": {k: [] for k in MATERIALS}} for m in methods}

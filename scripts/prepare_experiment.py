@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.color import luminance_np
-from roomlight.io import read_panorama, write_exr, write_panorama
+from roomlight.core.color import luminance_np
+from roomlight.core.io import read_panorama, write_exr, write_panorama
 
 
 def strip(capped: Path, inputs: Path, truth: Path) -> None:
@@ -93,8 +93,8 @@ def measure(prepared: Path, full: Path, figure: Path | None) -> dict:
 
 def _figure(path: Path, p, t, rad_p, rad_t) -> None:
     """Capped input | prepared | truth, radiance above depth, each 2x enlarged."""
-    from roomlight.io import save_png
-    from roomlight.io.preview import auto_exposure_stops, colorize_depth, tonemap_gamma
+    from roomlight.core.io import save_png
+    from roomlight.core.io.preview import auto_exposure_stops, colorize_depth, tonemap_gamma
 
     stops = auto_exposure_stops(rad_t)
     capped = rad_t.copy()

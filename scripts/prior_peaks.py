@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from roomlight.data.dataset import load_training_pair
-from roomlight.eval.metrics import peak_contrast
-from roomlight.model.runs import load_run_model
+from roomlight.prior.data.dataset import load_training_pair
+from roomlight.prior.eval.metrics import peak_contrast
+from roomlight.prior.model.runs import load_run_model
 
 
 def main() -> None:

@@ -26,7 +26,7 @@ def rng():
 @pytest.fixture(scope="session")
 def mi():
     """The mitsuba module with roomlight's variant active (LLVM on CPU machines)."""
-    from roomlight.render.variant import mitsuba
+    from roomlight.core.render.variant import mitsuba
 
     return mitsuba()
 

@@ -1,4 +1,4 @@
-"""Shared helpers of the roomlight.io tests (fixtures are re-exported by the test modules)."""
+"""Shared helpers of the roomlight.core.io tests (fixtures are re-exported by the test modules)."""
 
 from __future__ import annotations
 

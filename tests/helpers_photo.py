@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from roomlight.photo.camera import PhotoCamera
-from roomlight.photo.synthetic import SyntheticObject, render_photo_case
+from roomlight.fitting.photo.camera import PhotoCamera
+from roomlight.fitting.photo.synthetic import SyntheticObject, render_photo_case
 
 #: Two spheres on the floor of the example room turned so that its window faces the camera
 #: (:func:`window_room`): one near the camera on the left, one farther away near the window, in front of
@@ -26,8 +26,8 @@ def bright_wall_room(height: int = 16, wall: float = 0.9):
     depends strongly on how close it stands to the front wall."""
     import torch
 
-    from roomlight.geometry.analytic import box_distance
-    from roomlight.geometry.equirect import pixel_directions
+    from roomlight.core.geometry.analytic import box_distance
+    from roomlight.core.geometry.equirect import pixel_directions
 
     lo, hi = (-2.0, -1.5, -3.0), (2.0, 1.3, 2.0)
     d = pixel_directions(height, 2 * height, dtype=torch.float64)
@@ -46,7 +46,7 @@ def window_room(height: int = 16):
     +x wall, lies ahead of a camera looking along -z: (radiance (H, 2H, 3), radial depth (H, 2H))."""
     import torch
 
-    from roomlight.examples import example_room
+    from roomlight.core.examples import example_room
 
     rad, depth = example_room(height)
     shift = -(2 * height) // 4   # u -> u - 1/4: the direction u = 1/4 (+x) moves to u = 0 (-z)
@@ -54,7 +54,7 @@ def window_room(height: int = 16):
 
 
 def tiny_objects(objects=TINY_OBJECTS) -> list[SyntheticObject]:
-    from roomlight.scene.shapes import builtin_shape
+    from roomlight.fitting.scene.shapes import builtin_shape
 
     out = []
     for label, shape, radius, centre, albedo, rough, metal in objects:

@@ -5,9 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from roomlight.examples import example_room
-from roomlight.io import save_png, write_exr, write_panorama
-from roomlight.scene.description import parse_scene, save_scene
+from roomlight.core.examples import example_room
+from roomlight.core.io import save_png, write_exr, write_panorama
+from roomlight.fitting.scene.description import parse_scene, save_scene
 
 
 def make_tiny_scene(root: Path, height: int = 16, res: int = 40, spp: int = 256, material: str = "diffuse",
@@ -15,8 +15,8 @@ def make_tiny_scene(root: Path, height: int = 16, res: int = 40, spp: int = 256,
     """Write a scene (two objects in the input view) whose target is rendered under the example
     room's 2.5D area light, or under ``light`` = (radiance (h, 2h, 3), depth (h, 2h)) when given;
     returns (scene, true radiance, true depth)."""
-    from roomlight.render.scene import EmitterScene
-    from roomlight.scene.build import view_objects
+    from roomlight.core.render.scene import EmitterScene
+    from roomlight.fitting.scene.build import view_objects
 
     root = Path(root)
     root.mkdir(parents=True, exist_ok=True)
@@ -52,9 +52,9 @@ def make_tiny_scene(root: Path, height: int = 16, res: int = 40, spp: int = 256,
 def _object_mask(scene, res: int) -> np.ndarray:
     """(res, res) bool: camera rays through pixel centres that hit an object (the emitter is
     background)."""
-    from roomlight.render.variant import mitsuba
-    from roomlight.geometry.projection import perspective_directions
-    from roomlight.scene.build import view_objects
+    from roomlight.core.render.variant import mitsuba
+    from roomlight.core.geometry.projection import perspective_directions
+    from roomlight.fitting.scene.build import view_objects
 
     mi = mitsuba()
     cam = scene.view("input").camera

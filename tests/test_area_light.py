@@ -3,10 +3,10 @@ from collections import Counter
 import pytest
 import torch
 
-from roomlight.emitter.area_light import area_light_topology, area_light_vertices, build_area_light
-from roomlight.emitter.envmap import envmap_data
+from roomlight.core.emitter.area_light import area_light_topology, area_light_vertices, build_area_light
+from roomlight.core.emitter.envmap import envmap_data
 from roomlight.errors import ShapeError
-from roomlight.geometry import pixel_directions
+from roomlight.core.geometry import pixel_directions
 
 
 def star_depth(h, w, seed=0, dtype=torch.float64):
@@ -16,8 +16,8 @@ def star_depth(h, w, seed=0, dtype=torch.float64):
 
 def veni_d_depth(h, w, seed=0, dtype=torch.float64):
     """The depth VENI+D decodes from a random latent (untrained network, scaled to a room)."""
-    from roomlight.model.normalization import Normalization
-    from roomlight.model.veni import VeniConfig, VeniVAE
+    from roomlight.prior.model.normalization import Normalization
+    from roomlight.prior.model.veni import VeniConfig, VeniVAE
 
     torch.manual_seed(seed)
     cfg = VeniConfig(resolution=(h, w), latent_vectors=4, depth=True, channels=8, invariants=2, blocks=1, heads=2,

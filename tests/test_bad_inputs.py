@@ -18,10 +18,10 @@ import pytest
 from click.testing import CliRunner
 
 from roomlight.cli.main import cli
-from roomlight.examples import example_room
-from roomlight.io import write_exr, write_panorama
-from roomlight.model import PanoVAE, get_preset
-from roomlight.model.normalization import Normalization
+from roomlight.core.examples import example_room
+from roomlight.core.io import write_exr, write_panorama
+from roomlight.prior.model import PanoVAE, get_preset
+from roomlight.prior.model.normalization import Normalization
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
@@ -360,7 +360,7 @@ def _wrong_value(default):
 def _train_fields():
     from dataclasses import fields
 
-    from roomlight.train.config import TrainConfig
+    from roomlight.prior.train.config import TrainConfig
 
     cfg = TrainConfig()
     return [(f.name, _wrong_value(getattr(cfg, f.name))) for f in fields(TrainConfig)]
@@ -379,7 +379,7 @@ def test_every_training_setting_refuses_a_wrong_type_by_name(tmp_path, field, va
 def _bench_fields():
     from dataclasses import fields
 
-    from roomlight.bench.builder import BenchConfig
+    from roomlight.evaluation.bench.builder import BenchConfig
 
     cfg = BenchConfig()
     return [(f.name, _wrong_value(getattr(cfg, f.name))) for f in fields(BenchConfig)]

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.evaluate.errors import BenchError
-from roomlight.bench.recording import record_ldr
+from roomlight.evaluation.harness.errors import BenchError
+from roomlight.evaluation.bench.recording import record_ldr
 from roomlight.errors import RoomlightError
-from roomlight.examples import example_room
-from roomlight.io import write_panorama
+from roomlight.core.examples import example_room
+from roomlight.core.io import write_panorama
 
 #: Small settings shared by the builder fixture and the CLI test (which then resumes the build).
 SMALL = {"emitter_height": 16, "width": 32, "height": 32, "spp": 16, "materials": ("diffuse", "mirror")}
@@ -21,7 +21,7 @@ SMALL = {"emitter_height": 16, "width": 32, "height": 32, "spp": 16, "materials"
 # ----------------------------------------------------------------------------------- placement
 @pytest.fixture(scope="module")
 def room_probe():
-    from roomlight.bench.placement import EmitterProbe
+    from roomlight.evaluation.bench.placement import EmitterProbe
 
     _, depth = example_room(32)
     return EmitterProbe(depth)
@@ -47,9 +47,9 @@ def _emitter_distance(probe, dirs):
 
 def check_placement(probe, placed, cfg):
     """The protocol's rules, checked independently of the placement code."""
-    from roomlight.bench.placement import STRATA
-    from roomlight.scene.build import object_geometry
-    from roomlight.scene.description import MaterialSpec, ObjectSpec
+    from roomlight.evaluation.bench.placement import STRATA
+    from roomlight.fitting.scene.build import object_geometry
+    from roomlight.fitting.scene.description import MaterialSpec, ObjectSpec
 
     assert [o.role for o in placed] == ["input", "input", "probe"] and placed[2].shape == "sphere"
     # Boxes: inside the frame, 0.25-0.35 of the frame width, square in pixels, pairwise disjoint.
@@ -92,7 +92,7 @@ def check_placement(probe, placed, cfg):
 @pytest.mark.mitsuba
 @pytest.mark.parametrize("seed", range(4))
 def test_placement_rules(room_probe, seed):
-    from roomlight.bench.placement import PlacementConfig, place_objects
+    from roomlight.evaluation.bench.placement import PlacementConfig, place_objects
 
     cfg = PlacementConfig()
     placed = place_objects(room_probe, np.random.default_rng(seed), ["knot", "spiky"], cfg)
@@ -102,9 +102,9 @@ def test_placement_rules(room_probe, seed):
 
 @pytest.mark.mitsuba
 def test_placement_of_a_mesh_file(room_probe, tmp_path):
-    from roomlight.bench.placement import PlacementConfig, place_objects
-    from roomlight.io import write_ply
-    from roomlight.scene import builtin_shape
+    from roomlight.evaluation.bench.placement import PlacementConfig, place_objects
+    from roomlight.core.io import write_ply
+    from roomlight.fitting.scene import builtin_shape
 
     v, f = builtin_shape("cup")
     write_ply(tmp_path / "big cup.ply", v * 3.0 + np.array([5.0, -1.0, 2.0], np.float32), f)  # off-centre, large
@@ -117,7 +117,7 @@ def test_placement_of_a_mesh_file(room_probe, tmp_path):
 
 @pytest.mark.mitsuba
 def test_placement_is_deterministic_and_fails_cleanly(room_probe):
-    from roomlight.bench.placement import (
+    from roomlight.evaluation.bench.placement import (
         EmitterProbe,
         PlacementConfig,
         PlacementError,
@@ -145,7 +145,7 @@ def panos(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def bench(panos, tmp_path_factory):
-    from roomlight.bench.builder import BenchConfig, make_benchmark
+    from roomlight.evaluation.bench.builder import BenchConfig, make_benchmark
 
     out = tmp_path_factory.mktemp("bench")
     manifest = make_benchmark(panos, out, BenchConfig(**SMALL), progress=False)
@@ -156,11 +156,11 @@ def bench(panos, tmp_path_factory):
 def test_builder_writes_scenes_renders_and_masks(bench, panos):
     from PIL import Image
 
-    from roomlight.bench.builder import load_emitter_panorama
-    from roomlight.bench.placement import ScreenBox
-    from roomlight.bench.rendering import object_coverage
-    from roomlight.io import luminance, read_exr
-    from roomlight.scene import load_scene
+    from roomlight.evaluation.bench.builder import load_emitter_panorama
+    from roomlight.evaluation.bench.placement import ScreenBox
+    from roomlight.evaluation.bench.rendering import object_coverage
+    from roomlight.core.io import luminance, read_exr
+    from roomlight.fitting.scene import load_scene
 
     out, manifest = bench
     assert [s["id"] for s in manifest["scenes"]] == ["room/diffuse", "room/mirror"]
@@ -201,7 +201,7 @@ def test_builder_writes_scenes_renders_and_masks(bench, panos):
 
 @pytest.mark.mitsuba
 def test_builder_resumes_and_rejects_bad_inputs(bench, panos, tmp_path):
-    from roomlight.bench.builder import BenchConfig, make_benchmark
+    from roomlight.evaluation.bench.builder import BenchConfig, make_benchmark
 
     out, manifest = bench
     stamp = (out / "room" / "mirror" / "scene.json").stat().st_mtime_ns
@@ -237,7 +237,7 @@ def _stub_fit(calls):
 
 @pytest.fixture(scope="module")
 def results(bench, tmp_path_factory):
-    from roomlight.bench.runner import run_benchmark
+    from roomlight.evaluation.bench.runner import run_benchmark
 
     res = tmp_path_factory.mktemp("res")
     calls = []
@@ -248,7 +248,7 @@ def results(bench, tmp_path_factory):
 
 @pytest.mark.mitsuba
 def test_runner_scores_cases_and_resumes(bench, results):
-    from roomlight.bench.runner import run_benchmark
+    from roomlight.evaluation.bench.runner import run_benchmark
 
     res, summary, calls = results
     assert sorted(summary.done) == ["room/diffuse/oracle", "room/diffuse/x2", "room/mirror/oracle", "room/mirror/x2"]
@@ -282,9 +282,9 @@ def test_runner_scores_cases_and_resumes(bench, results):
 def test_objects_outside_the_recovered_light(bench, tmp_path):
     """The share of each view's object surface a recovered emitter leaves outside, checked against
     the points' own distances for constant-depth emitters, and its place in the report."""
-    from roomlight.bench.report import outside_cases, write_tables
-    from roomlight.bench.runner import emitter_depth, objects_outside
-    from roomlight.scene.build import load_scene, scene_points
+    from roomlight.evaluation.bench.report import outside_cases, write_tables
+    from roomlight.evaluation.bench.runner import emitter_depth, objects_outside
+    from roomlight.fitting.scene.build import load_scene, scene_points
 
     out, manifest = bench
     scene = load_scene(out / manifest["scenes"][0]["scene"])
@@ -322,7 +322,7 @@ def test_objects_outside_the_recovered_light(bench, tmp_path):
 
 
 def test_shards_partition_the_cases(bench):
-    from roomlight.bench.runner import list_cases, parse_shard
+    from roomlight.evaluation.bench.runner import list_cases, parse_shard
 
     full = list_cases(bench[0], ["a", "b", "c"])
     assert len(full) == 6
@@ -336,7 +336,7 @@ def test_shards_partition_the_cases(bench):
 
 @pytest.fixture(scope="module")
 def report(results, tmp_path_factory):
-    from roomlight.bench.report import write_report
+    from roomlight.evaluation.bench.report import write_report
 
     return write_report(results[0], tmp_path_factory.mktemp("rep"), progress=False)
 
@@ -402,9 +402,9 @@ def test_cli_make_run_report(bench, panos, tmp_path):
 
 @pytest.mark.mitsuba
 def test_masks_do_not_depend_on_ray_batching(bench, monkeypatch):
-    from roomlight.bench import rendering
-    from roomlight.render import raycast
-    from roomlight.scene import load_scene
+    from roomlight.evaluation.bench import rendering
+    from roomlight.core.render import raycast
+    from roomlight.fitting.scene import load_scene
 
     scene = load_scene(bench[0] / "room" / "diffuse" / "scene.json")
     cov, ids = rendering.object_coverage(scene, "input", supersample=2)
@@ -416,8 +416,8 @@ def test_masks_do_not_depend_on_ray_batching(bench, monkeypatch):
 
 @pytest.mark.mitsuba
 def test_render_passes_average_to_one_launch(bench):
-    from roomlight.bench.rendering import render_passes, view_emitter_scene
-    from roomlight.scene import load_scene
+    from roomlight.evaluation.bench.rendering import render_passes, view_emitter_scene
+    from roomlight.fitting.scene import load_scene
 
     scene = load_scene(bench[0] / "room" / "diffuse" / "scene.json")
     pano = scene.emitter.load()
@@ -432,9 +432,9 @@ def test_render_passes_average_to_one_launch(bench):
 
 @pytest.mark.mitsuba
 def test_builder_with_a_mesh_file_given_by_relative_path(panos, tmp_path, monkeypatch):
-    from roomlight.bench.builder import BenchConfig, make_benchmark
-    from roomlight.io import write_ply
-    from roomlight.scene import builtin_shape, load_scene
+    from roomlight.evaluation.bench.builder import BenchConfig, make_benchmark
+    from roomlight.core.io import write_ply
+    from roomlight.fitting.scene import builtin_shape, load_scene
 
     monkeypatch.chdir(tmp_path)
     write_ply(tmp_path / "bunny.ply", *builtin_shape("blob"))
@@ -448,8 +448,8 @@ def test_builder_with_a_mesh_file_given_by_relative_path(panos, tmp_path, monkey
 def test_cli_paper_flags_reach_the_configs(monkeypatch, tmp_path):
     from click.testing import CliRunner
 
-    import roomlight.bench.builder as builder
-    import roomlight.bench.runner as runner
+    import roomlight.evaluation.bench.builder as builder
+    import roomlight.evaluation.bench.runner as runner
     from roomlight.cli.bench import command
 
     seen = {}

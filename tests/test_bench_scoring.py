@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.evaluate.errors import BenchError
-from roomlight.evaluate.metrics import angular_error_deg, psnr_ldr, rmse_hdr, score_view
-from roomlight.bench.recording import exposure_for, record_ldr, saturated_fraction
+from roomlight.evaluation.harness.errors import BenchError
+from roomlight.evaluation.harness.metrics import angular_error_deg, psnr_ldr, rmse_hdr, score_view
+from roomlight.evaluation.bench.recording import exposure_for, record_ldr, saturated_fraction
 from roomlight.errors import RoomlightError, ShapeError
 
 
@@ -94,7 +94,7 @@ def _fake_results(root: Path, rows):
 
 
 def test_report_tables_hand_computed(tmp_path):
-    from roomlight.bench.report import markdown_table, write_report
+    from roomlight.evaluation.bench.report import markdown_table, write_report
 
     _fake_results(tmp_path, [
         ("r1", "diffuse", "prior", 20.0, 0.1, 1.0), ("r2", "diffuse", "prior", 30.0, 0.3, 3.0),
@@ -130,7 +130,7 @@ def test_report_tables_hand_computed(tmp_path):
 def test_paired_differences_hand_computed(tmp_path):
     """Per-scene differences prior - baseline: pairing by scene, win counts with the metric's
     direction, scenes missing on either side left out; the report carries them."""
-    from roomlight.bench.report import write_report
+    from roomlight.evaluation.bench.report import write_report
 
     _fake_results(tmp_path, [
         ("r1", "diffuse", "prior", 20.0, 0.1, 1.0), ("r2", "diffuse", "prior", 30.0, 0.3, 3.0),
@@ -162,8 +162,8 @@ def test_paired_differences_hand_computed(tmp_path):
 def test_paired_tables_against_another_reference_method(tmp_path):
     """``reference``: any method's per-scene differences against the others, hand-computed; a
     method without finished cases is refused with the methods the results do have."""
-    from roomlight.evaluate.errors import BenchError
-    from roomlight.bench.report import write_report
+    from roomlight.evaluation.harness.errors import BenchError
+    from roomlight.evaluation.bench.report import write_report
 
     _fake_results(tmp_path, [
         ("r1", "diffuse", "prior", 20.0, 0.1, 1.0), ("r2", "diffuse", "prior", 30.0, 0.3, 3.0),
@@ -191,7 +191,7 @@ def test_paired_tables_against_another_reference_method(tmp_path):
 def test_bootstrap_interval_matches_the_normal_approximation():
     """For many scenes the percentile bootstrap of a mean approaches mean +- 1.96 s / sqrt(n)
     (s: the population standard deviation, which is what the bootstrap resamples)."""
-    from roomlight.stats import bootstrap_mean_interval
+    from roomlight.core.stats import bootstrap_mean_interval
 
     x = np.random.default_rng(3).normal(1.0, 2.0, 400)
     lo, hi = bootstrap_mean_interval(x)
@@ -203,7 +203,7 @@ def test_bootstrap_interval_matches_the_normal_approximation():
 
 
 def test_interval_verdict_reads_the_side_of_zero_by_hand():
-    from roomlight.stats import interval_verdict
+    from roomlight.core.stats import interval_verdict
 
     assert interval_verdict(0.1, 0.5, 10, higher_is_better=True) == 1
     assert interval_verdict(0.1, 0.5, 10, higher_is_better=False) == -1
@@ -215,7 +215,7 @@ def test_interval_verdict_reads_the_side_of_zero_by_hand():
 
 
 def test_report_without_results_fails_cleanly(tmp_path):
-    from roomlight.bench.report import write_report
+    from roomlight.evaluation.bench.report import write_report
 
     with pytest.raises(BenchError, match="no results"):
         write_report(tmp_path)

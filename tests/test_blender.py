@@ -40,8 +40,8 @@ def _disc(shrink: float = 0.8) -> np.ndarray:
 def _mitsuba(radiance, depth, bsdf: dict, spp: int) -> np.ndarray:
     import torch
 
-    from roomlight.render.camera import perspective_sensor
-    from roomlight.render.scene import EmitterScene
+    from roomlight.core.render.camera import perspective_sensor
+    from roomlight.core.render.scene import EmitterScene
 
     sensor = perspective_sensor(CAMERA["origin"], CAMERA["target"], CAMERA["up"], CAMERA["fov"], SIZE, SIZE)
     es = EmitterScene("mesh", tuple(radiance.shape[:2]), objects={"probe": {"type": "sphere", **PROBE, "bsdf": bsdf}},
@@ -57,9 +57,9 @@ def test_a_probe_in_blender_has_roomlights_brightness_and_mirrors_the_same_room(
     py = blender_python()
     if py is None:
         pytest.skip("no Python with Blender's bpy module (make blender, or set ROOMLIGHT_BLENDER_PYTHON)")
-    from roomlight.examples import example_room
+    from roomlight.core.examples import example_room
     from roomlight.export import export_light, load_light
-    from roomlight.io import read_exr, write_panorama
+    from roomlight.core.io import read_exr, write_panorama
 
     rad, depth = example_room(32)
     write_panorama(tmp_path / "room.exr", (rad.numpy(), depth.numpy()), half=False)

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from roomlight.model import ModelConfig, Normalization, PanoVAE
+from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
@@ -94,9 +94,9 @@ def test_bundling_refuses_the_same_weights_and_another_architecture(bundle_and_r
 
 
 def test_bundling_ships_a_veni_model_and_refuses_to_replace_one_family_by_the_other(bundle_and_run, tmp_path):
-    from roomlight.model.bundled import BUNDLED_MODELS
-    from roomlight.model.families import load_model
-    from roomlight.model.veni import VENI_PRESETS, VeniVAE
+    from roomlight.prior.model.bundled import BUNDLED_MODELS
+    from roomlight.prior.model.families import load_model
+    from roomlight.prior.model.veni import VENI_PRESETS, VeniVAE
 
     torch.manual_seed(3)
     veni = VeniVAE(VENI_PRESETS["veni-d-tiny"], Normalization(mean=(0.5, 0.4, 0.3, 1.0), std=(0.7, 0.6, 0.5, 0.4)))

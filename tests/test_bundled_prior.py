@@ -15,7 +15,7 @@ pytestmark = pytest.mark.usefixtures("one_torch_thread")
 @pytest.fixture(scope="module")
 def bundled():
     from roomlight.demo import bundled_prior_path
-    from roomlight.model import PanoVAE
+    from roomlight.prior.model import PanoVAE
 
     path = bundled_prior_path()
     assert path is not None, "the package must ship a prior in roomlight/assets/prior"
@@ -57,9 +57,9 @@ def training_room_contrast():
     """Brightest over median luminance of the reference rooms, path-traced at the models' 64 x 128 from their
     capture points as `roomlight synth` renders them, with 4 samples a pixel instead of 144: the median is
     robust to the noise, and the brightest pixel sees a light source directly, which is noise-free."""
-    from roomlight.synth.camera import render_aovs, render_radiance
-    from roomlight.synth.rooms import generate_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.datagen.synth.camera import render_aovs, render_radiance
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.datagen.synth.scene import build_scene
 
     out = []
     for seed in REFERENCE_ROOMS:
@@ -85,8 +85,8 @@ def test_bundled_prior_samples_show_light_sources(name, training_room_contrast):
     5.7x today (the reference rooms measure 33-420x). At least a quarter of the samples must show one: a prior
     that lost its lights (a zero latent decodes 1.4-2x) shows none, the training rooms all do.
     """
-    from roomlight.model.bundled import bundled_model_path
-    from roomlight.model.runs import load_run_model
+    from roomlight.prior.model.bundled import bundled_model_path
+    from roomlight.prior.model.runs import load_run_model
 
     if name.startswith("veni") and bundled_model_path(name) is None:
         pytest.skip(f"this checkout ships no bundled {name} model")
@@ -116,9 +116,9 @@ def test_bundled_veni_models_match_the_bundled_prior_and_record_their_training(n
     import json
 
     from roomlight.demo import bundled_prior_path
-    from roomlight.model.bundled import bundled_model_path
-    from roomlight.model.runs import load_run_model
-    from roomlight.model.veni import VENI_FORMAT_VERSION
+    from roomlight.prior.model.bundled import bundled_model_path
+    from roomlight.prior.model.runs import load_run_model
+    from roomlight.prior.model.veni import VENI_FORMAT_VERSION
 
     path = bundled_model_path(name)
     if path is None:

@@ -6,10 +6,10 @@ import pytest
 from click.testing import CliRunner
 
 from roomlight.cli.main import cli
-from roomlight.examples import example_room
-from roomlight.io import read_exr, read_ply, write_exr, write_panorama
-from roomlight.render.camera import perspective_sensor
-from roomlight.render.scene import EmitterScene
+from roomlight.core.examples import example_room
+from roomlight.core.io import read_exr, read_ply, write_exr, write_panorama
+from roomlight.core.render.camera import perspective_sensor
+from roomlight.core.render.scene import EmitterScene
 
 
 def run(*args):
@@ -78,7 +78,7 @@ def test_envmap_and_sphere_bundles(mi, pano_file, tmp_path, kind):
 
 
 def test_emitter_from_radiance_hdr_and_depth_png(tmp_path):
-    from roomlight.io import write_depth_png, write_hdr
+    from roomlight.core.io import write_depth_png, write_hdr
 
     rad, depth = example_room(16)
     write_hdr(tmp_path / "r.hdr", rad.numpy())
@@ -154,7 +154,7 @@ def test_fit_command_outputs_and_whole_frame_flag(tmp_path):
         res = json.loads((out / "result.json").read_text())
         assert res["config"]["crop_to_mask"] is cropped
         # The light's brightness, recomputed from the written panorama with Rec. 709 weights.
-        from roomlight.io import read_panorama
+        from roomlight.core.io import read_panorama
 
         rad = read_panorama(out / "panorama.exr").radiance.astype(np.float64)
         lum = rad @ np.array([0.2126, 0.7152, 0.0722])

@@ -92,7 +92,7 @@ def test_bad_intrinsics_text_and_non_square_pixels(files):
 
 
 def test_no_depth_and_no_estimator(files, monkeypatch):
-    import roomlight.photo.estimator as est
+    import roomlight.fitting.photo.estimator as est
 
     monkeypatch.setattr(est, "moge_available", lambda: False)
     r = run(files / "photo.png", "--mask", files / "mask.png", "--fov", 60, "--out", files / "out")
@@ -133,7 +133,7 @@ def test_photo_case_folder_with_a_bad_camera_json(files):
 def test_fit_photo_writes_every_output(tmp_path):
     """The command on a rendered photo case: every file of docs/photo.md, readable."""
     from helpers_photo import bright_wall_room, make_tiny_photo
-    from roomlight.io import read_panorama
+    from roomlight.core.io import read_panorama
 
     rad, depth = bright_wall_room(16)
     make_tiny_photo(tmp_path / "case", rad, depth, size=(24, 32), spp=32, key=None)
@@ -167,7 +167,7 @@ def test_presets_are_ordered_by_work_and_named_in_help():
     (steps x samples x fitted pixels) and is offered by ``--preset``."""
     from click.testing import CliRunner
 
-    from roomlight.photo.config import PHOTO_PRESETS
+    from roomlight.fitting.photo.config import PHOTO_PRESETS
 
     def work(cfg):
         return cfg.iterations * cfg.spp * cfg.render_size ** 2

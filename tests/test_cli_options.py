@@ -4,9 +4,9 @@ import click
 import pytest
 
 from roomlight.cli.common import RESOLUTION, default_of, parse_sets
-from roomlight.config import StrictConfig
+from roomlight.core.config import StrictConfig
 from roomlight.errors import RoomlightError
-from roomlight.inverse import FitConfig, fit_config
+from roomlight.fitting.inverse import FitConfig, fit_config
 
 
 def test_res_is_height_by_width_and_a_single_number_is_square():

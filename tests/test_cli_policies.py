@@ -15,12 +15,12 @@ import pytest
 from click.testing import CliRunner
 
 from roomlight.cli.main import cli
-from roomlight.data import write_toy_dataset
+from roomlight.prior.data import write_toy_dataset
 from roomlight.errors import InputFileError
-from roomlight.examples import example_room
-from roomlight.io import read_exr, write_panorama
-from roomlight.model import PanoVAE, get_preset
-from roomlight.model.normalization import Normalization
+from roomlight.core.examples import example_room
+from roomlight.core.io import read_exr, write_panorama
+from roomlight.prior.model import PanoVAE, get_preset
+from roomlight.prior.model.normalization import Normalization
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 SRC = str(Path(__file__).parents[1] / "src")
@@ -90,7 +90,7 @@ def test_threads_option_and_environment_variable_set_torch_threads():
 
 
 def test_default_threads_are_the_free_cpus_this_process_may_use(monkeypatch):
-    from roomlight import cpu
+    from roomlight.core import cpu
 
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2, 3}, raising=False)
     monkeypatch.setattr(cpu, "busy_cpus", lambda interval=0.05, exclude_self=False: 1.4)
@@ -106,7 +106,7 @@ def test_own_cpu_time_matches_getrusage_and_a_busy_process_is_seen():
     import resource
     import time
 
-    from roomlight import cpu
+    from roomlight.core import cpu
 
     hz = os.sysconf("SC_CLK_TCK")
     r0, t0 = resource.getrusage(resource.RUSAGE_SELF), cpu._own_ticks()
@@ -138,8 +138,8 @@ def _spin_for(seconds: float) -> None:
 def test_the_recheck_follows_the_load_only_for_a_count_roomlight_chose(monkeypatch):
     import torch
 
-    from roomlight import cpu
-    from roomlight.render import variant
+    from roomlight.core import cpu
+    from roomlight.core.render import variant
 
     before = torch.get_num_threads()
     monkeypatch.setenv("ROOMLIGHT_THREADS", "2")
@@ -167,9 +167,9 @@ def test_a_thread_count_given_on_the_command_line_is_not_measured_again(monkeypa
     it, and the mark must go with it, or the re-measurement between phases would change N mid-run."""
     import torch
 
-    from roomlight import cpu
+    from roomlight.core import cpu
     from roomlight.cli.threads import apply_thread_policy, default_threads
-    from roomlight.render import variant
+    from roomlight.core.render import variant
 
     before = torch.get_num_threads()
     for name in ("ROOMLIGHT_THREADS", "ROOMLIGHT_THREADS_AUTO", "ROOMLIGHT_DETERMINISTIC"):

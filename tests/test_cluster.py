@@ -21,14 +21,14 @@ def cluster():
 
 
 def _pixels(path):
-    from roomlight.io import read_exr
+    from roomlight.core.io import read_exr
 
     return {k: np.asarray(v) for k, v in read_exr(path).items()}
 
 
 @pytest.mark.slow
 def test_synth_on_a_cluster_equals_a_serial_run(cluster, tmp_path):
-    from roomlight.synth.dataset import SynthConfig, generate_dataset
+    from roomlight.datagen.synth.dataset import SynthConfig, generate_dataset
 
     cfg = dict(n=3, seed0=7, height=8, spp=4)
     serial = generate_dataset(tmp_path / "serial", SynthConfig(**cfg), progress=False)
@@ -48,10 +48,10 @@ def test_synth_on_a_cluster_equals_a_serial_run(cluster, tmp_path):
 
 
 def test_bench_run_on_a_cluster_equals_a_serial_run(cluster, tmp_path):
-    from roomlight.bench.builder import BenchConfig, make_benchmark
-    from roomlight.bench.runner import run_benchmark
-    from roomlight.examples import example_room
-    from roomlight.io import write_panorama
+    from roomlight.evaluation.bench.builder import BenchConfig, make_benchmark
+    from roomlight.evaluation.bench.runner import run_benchmark
+    from roomlight.core.examples import example_room
+    from roomlight.core.io import write_panorama
 
     rad, depth = example_room(16)
     (tmp_path / "panos").mkdir()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.color import (DISPLAY_GAMMA, LOG_EPS, MIDDLE_GREY, display_to_linear, display_to_uint8,
+from roomlight.core.color import (DISPLAY_GAMMA, LOG_EPS, MIDDLE_GREY, display_to_linear, display_to_uint8,
                              log_average_np, log_average_torch, luminance_np, luminance_torch, to_display,
                              to_display_at_key)
 

@@ -1,4 +1,4 @@
-"""Tests of roomlight.data: file splits, the dataset loader (bad files skipped by name), the packed
+"""Tests of roomlight.prior.data: file splits, the dataset loader (bad files skipped by name), the packed
 cache, the resumable sampler, the augmentations (against analytic scenes) and statistics."""
 
 from __future__ import annotations
@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.data import (PackedCache, PanoramaDataset, ResumableBatchSampler, augment_batch, collate_panoramas,
+from roomlight.prior.data import (PackedCache, PanoramaDataset, ResumableBatchSampler, augment_batch, collate_panoramas,
                             dataset_statistics, load_training_pair, mirror, normalization_from_dataset, roll_azimuth,
                             split_files, tilt, tilt_rotations, toy_panorama, write_toy_dataset)
-from roomlight.data.splits import find_panoramas, hash_fraction
-from roomlight.geometry.equirect import pixel_directions
-from roomlight.io import exposure_calibrate, write_exr, write_panorama
-from roomlight.model import Normalization
+from roomlight.prior.data.splits import find_panoramas, hash_fraction
+from roomlight.core.geometry.equirect import pixel_directions
+from roomlight.core.io import exposure_calibrate, write_exr, write_panorama
+from roomlight.prior.model import Normalization
 
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")

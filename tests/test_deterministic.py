@@ -42,8 +42,8 @@ def test_the_same_fit_twice_is_bit_identical(tmp_path):
     texels in varying order). The default fit (two workers, the adjoint on one) and the ``--deterministic``
     fit (one worker throughout) are equal number for number, so the default repeats itself as the
     one-worker fit does."""
-    from roomlight.io import read_panorama
-    from roomlight.photo.synthetic import example_photo_case
+    from roomlight.core.io import read_panorama
+    from roomlight.fitting.photo.synthetic import example_photo_case
 
     case = tmp_path / "case"
     example_photo_case(case, width=96, height=72, spp=16)
@@ -65,11 +65,11 @@ def test_every_fitting_method_repeats_itself_bit_for_bit(tmp_path):
     import torch
 
     from helpers_scene import make_tiny_scene
-    from roomlight.inverse import FitConfig, fit_scene
-    from roomlight.inverse.methods import METHODS
-    from roomlight.model import PanoVAE, get_preset
-    from roomlight.model.normalization import Normalization
-    from roomlight.model.veni import VENI_PRESETS, VeniVAE
+    from roomlight.fitting.inverse import FitConfig, fit_scene
+    from roomlight.fitting.inverse.methods import METHODS
+    from roomlight.prior.model import PanoVAE, get_preset
+    from roomlight.prior.model.normalization import Normalization
+    from roomlight.prior.model.veni import VENI_PRESETS, VeniVAE
 
     scene, _, _ = make_tiny_scene(tmp_path / "scene")
     norm = Normalization(mean=(0.3, 0.3, 0.3, 1.0), std=(0.5, 0.5, 0.5, 0.4))

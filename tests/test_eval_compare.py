@@ -1,4 +1,4 @@
-"""Paired comparison of two eval-prior reports (roomlight.eval.compare, scripts/compare_prior_evals.py)."""
+"""Paired comparison of two eval-prior reports (roomlight.prior.eval.compare, scripts/compare_prior_evals.py)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from roomlight.errors import RoomlightError
-from roomlight.eval.compare import compare_reports, comparison_markdown
+from roomlight.prior.eval.compare import compare_reports, comparison_markdown
 
 
 def _report(rows: dict[str, dict[str, dict]]) -> dict:

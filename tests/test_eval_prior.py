@@ -1,4 +1,4 @@
-"""Tests of roomlight.eval: metrics against hand values and a slow SSIM reference, the prior
+"""Tests of roomlight.prior.eval: metrics against hand values and a slow SSIM reference, the prior
 evaluation report and the eval-prior command."""
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ import pytest
 import torch
 from click.testing import CliRunner
 
-from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
-from roomlight.eval import abs_rel, evaluate_prior, load_lpips, psnr, psnr_hdr, report_markdown, ssim, to_ldr
-from roomlight.eval.metrics import gaussian_window, peak_contrast, peak_error_stops
-from roomlight.fit import LatentFitConfig
-from roomlight.model import Normalization, PanoVAE, get_preset
+from roomlight.prior.data import PanoramaDataset, find_panoramas, write_toy_dataset
+from roomlight.prior.eval import abs_rel, evaluate_prior, load_lpips, psnr, psnr_hdr, report_markdown, ssim, to_ldr
+from roomlight.prior.eval.metrics import gaussian_window, peak_contrast, peak_error_stops
+from roomlight.prior.latent_fit import LatentFitConfig
+from roomlight.prior.model import Normalization, PanoVAE, get_preset
 
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -171,7 +171,7 @@ def test_radiance_only_evaluation_of_panoramas_without_depth(setup, eval_cli, tm
     """Real captures have no depth: --radiance-only fits z to radiance alone. On copies of the
     toy panoramas with the depth stripped (EXR and Radiance .hdr), it must give the same fit
     and the same radiance metrics as fitting radiance alone on the originals."""
-    from roomlight.io import read_panorama, write_exr, write_hdr
+    from roomlight.core.io import read_panorama, write_exr, write_hdr
 
     root, ds, model = setup
     plain = tmp_path / "plain"
@@ -258,7 +258,7 @@ def _sphere_laplacian(h: int, w: int) -> torch.Tensor:
 def test_pixel_level_fit_reaches_the_closed_form_minimiser():
     """Objective per channel: w_c mean (x - t)^2 + λ x^T L x / (HW); its minimiser solves
     (w_c I + λ L) x = w_c t, with L the Laplacian of the neighbour pairs (written out above)."""
-    from roomlight.fit.pixel import fit_pixels
+    from roomlight.prior.latent_fit.pixel import fit_pixels
 
     torch.manual_seed(5)
     h, w = 4, 8

@@ -6,10 +6,10 @@ import pytest
 import torch
 
 from roomlight.errors import RoomlightError
-from roomlight.experiments.ablation import ABLATION_PRESETS, AblationConfig, row_train_config, run_ablation
-from roomlight.experiments.ablation_rows import ROWS
-from roomlight.model import ModelConfig, Normalization, PanoVAE, get_preset
-from roomlight.train.config import TrainConfig, config_differences, get_train_preset
+from roomlight.evaluation.experiments.ablation import ABLATION_PRESETS, AblationConfig, row_train_config, run_ablation
+from roomlight.evaluation.experiments.ablation_rows import ROWS
+from roomlight.prior.model import ModelConfig, Normalization, PanoVAE, get_preset
+from roomlight.prior.train.config import TrainConfig, config_differences, get_train_preset
 
 
 def _params(model) -> int:
@@ -52,7 +52,7 @@ def test_without_adagn_the_latent_reaches_the_decoder_only_through_its_first_lay
 
 
 def test_without_latitude_channels_the_network_never_asks_for_them(monkeypatch):
-    import roomlight.model.networks as pv
+    import roomlight.prior.model.networks as pv
 
     def refuse(*a, **k):
         raise AssertionError("latitude channels requested")

@@ -10,11 +10,11 @@ from click.testing import CliRunner
 
 from roomlight.cli.main import cli
 from roomlight.errors import RoomlightError
-from roomlight.experiments.capacity import CapacityConfig, run_capacity
-from roomlight.experiments.capacity_record import KINDS, room_cells, score_renders
-from roomlight.experiments.capacity_report import summarize_capacity
-from roomlight.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout
-from roomlight.render.raycast import sphere_directions
+from roomlight.evaluation.experiments.capacity import CapacityConfig, run_capacity
+from roomlight.evaluation.experiments.capacity_record import KINDS, room_cells, score_renders
+from roomlight.evaluation.experiments.capacity_report import summarize_capacity
+from roomlight.evaluation.experiments.layout import Caster, LayoutConfig, ProbeLayout, place_layout
+from roomlight.core.render.raycast import sphere_directions
 
 #: Small enough for a test: 32 x 64 panoramas, 24 x 24 probe images.
 TINY = dict(pano_height=32, pano_spp=16, image_size=24, gt_spp=64, emitter_spp=64)
@@ -86,8 +86,8 @@ def test_settings_are_checked():
 
 @pytest.mark.mitsuba
 def test_clearance_matches_the_distance_to_a_box_room(mi):
-    from roomlight.synth.rooms import box_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.datagen.synth.rooms import box_room
+    from roomlight.datagen.synth.scene import build_scene
 
     caster = Caster(build_scene(box_room(size=(4.0, 2.7, 5.0), light=False)))
     for p in ([1.0, 1.0, 1.5], [3.5, 2.0, 4.2], [2.0, 0.3, 2.5]):
@@ -108,8 +108,8 @@ def test_sphere_directions_are_unit_and_balanced():
 
 @pytest.mark.mitsuba
 def test_procedural_layout_keeps_clear_of_surfaces(mi):
-    from roomlight.synth.rooms import generate_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.datagen.synth.scene import build_scene
 
     room = generate_room(3)
     caster = Caster(build_scene(room))
@@ -139,9 +139,9 @@ def test_furnace_room_every_emitter_gives_half_the_uniform_radiance(mi, tmp_path
     """A closed room whose every surface emits L and reflects nothing: a gray (albedo 0.5) diffuse
     probe anywhere reflects exactly 0.5 L, and every emitter built from any viewpoint's panorama
     shows the same uniform L. Calibrated units make L = 1, so every render averages 0.5."""
-    from roomlight.experiments.layout import cameras_for
-    from roomlight.synth.rooms import box_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.evaluation.experiments.layout import cameras_for
+    from roomlight.datagen.synth.rooms import box_room
+    from roomlight.datagen.synth.scene import build_scene
 
     room = box_room(size=(4.0, 2.6, 4.0), albedo=(0.0, 0.0, 0.0), emission=(3.0, 3.0, 3.0))
     probes = np.array([[1.2, 1.2, 1.5], [2.8, 1.2, 1.5], [2.0, 1.0, 2.8]])

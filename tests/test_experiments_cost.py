@@ -7,8 +7,8 @@ from click.testing import CliRunner
 
 from roomlight.cli.main import cli
 from roomlight.errors import RoomlightError
-from roomlight.experiments import cost as cost_mod
-from roomlight.experiments.cost import COST_PRESETS, PAPER_SCHEDULE, CostConfig, median_seconds
+from roomlight.evaluation.experiments import cost as cost_mod
+from roomlight.evaluation.experiments.cost import COST_PRESETS, PAPER_SCHEDULE, CostConfig, median_seconds
 
 
 def test_median_seconds_times_each_call_after_a_warm_up(monkeypatch):

@@ -15,9 +15,9 @@ import pytest
 from click.testing import CliRunner
 
 from roomlight.cli.main import cli
-from roomlight.emitter.export import export_emitter
-from roomlight.examples import example_room
-from roomlight.io import read_ply
+from roomlight.core.emitter.export import export_emitter
+from roomlight.core.examples import example_room
+from roomlight.core.io import read_ply
 
 trimesh = pytest.importorskip("trimesh")
 
@@ -155,7 +155,7 @@ def test_load_light_finds_the_light_behind_each_kind_of_output(tmp_path):
     import json as _json
 
     from roomlight.export import load_light
-    from roomlight.io import write_panorama
+    from roomlight.core.io import write_panorama
 
     rad, depth = example_room(8)
     export_emitter(tmp_path / "samples" / "sample_000", rad, depth, "mesh")

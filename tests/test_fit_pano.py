@@ -1,4 +1,4 @@
-"""Tests of latent fitting (roomlight.fit) and the fit-pano / convert commands."""
+"""Tests of latent fitting (roomlight.prior.latent_fit) and the fit-pano / convert commands."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ import pytest
 import torch
 from click.testing import CliRunner
 
-from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
+from roomlight.prior.data import PanoramaDataset, find_panoramas, write_toy_dataset
 from roomlight.errors import RoomlightError
-from roomlight.fit import LatentFitConfig, fit_latent
-from roomlight.io import read_panorama
-from roomlight.model import Normalization, PanoVAE, get_preset
+from roomlight.prior.latent_fit import LatentFitConfig, fit_latent
+from roomlight.core.io import read_panorama
+from roomlight.prior.model import Normalization, PanoVAE, get_preset
 
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -35,7 +35,7 @@ def toy(tmp_path_factory):
 def model(toy):
     """A tiny untrained prior whose AdaGN layers are given small random weights, so that z reaches
     every decoder layer (a fresh AdaGN is zero-initialised and ignores z)."""
-    from roomlight.model.blocks import AdaGN
+    from roomlight.prior.model.blocks import AdaGN
 
     _, rad, dep = toy
     torch.manual_seed(0)
@@ -148,7 +148,7 @@ def test_fit_pano_cli_writes_a_better_fit(model, toy, tmp_path):
     for name in ("target.exr", "comparison.png", "emitter/emitter.ply", "emitter/scene.xml"):
         assert (tmp_path / "fit" / name).exists(), name
     # Radiance-only panoramas fall back to a radiance fit.
-    from roomlight.io import write_panorama
+    from roomlight.core.io import write_panorama
 
     write_panorama(tmp_path / "rgb.exr", rad[0] * 2.0)
     res = CliRunner().invoke(_cli(fit_pano), ["fit-pano", "--model", str(tmp_path / "m"), str(tmp_path / "rgb.exr"),
@@ -176,7 +176,7 @@ def test_fit_pano_cli_writes_a_better_fit(model, toy, tmp_path):
 
 def test_convert_cli_writes_a_loadable_checkpoint(tmp_path):
     from roomlight.cli import convert
-    from roomlight.model import to_authors_state_dict
+    from roomlight.prior.model import to_authors_state_dict
 
     cfg = get_preset("tiny")
     torch.manual_seed(1)

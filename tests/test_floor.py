@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from roomlight.emitter.area_light import build_area_light
-from roomlight.inverse.floor import apply_floor, depth_floor, outside_share
+from roomlight.core.emitter.area_light import build_area_light
+from roomlight.fitting.inverse.floor import apply_floor, depth_floor, outside_share
 
 
 def _first_hits(vertices: np.ndarray, faces: np.ndarray, directions: np.ndarray) -> np.ndarray:

@@ -17,14 +17,14 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from roomlight.bench.builder import BenchConfig  # noqa: E402
+from roomlight.evaluation.bench.builder import BenchConfig  # noqa: E402
 from roomlight.errors import RoomlightError  # noqa: E402
-from roomlight.fit import LatentFitConfig  # noqa: E402
-from roomlight.inverse.config import FitConfig  # noqa: E402
-from roomlight.losses import LossConfig  # noqa: E402
-from roomlight.model import ModelConfig  # noqa: E402
-from roomlight.scene.description import parse_scene  # noqa: E402
-from roomlight.train.config import TrainConfig  # noqa: E402
+from roomlight.prior.latent_fit import LatentFitConfig  # noqa: E402
+from roomlight.fitting.inverse.config import FitConfig  # noqa: E402
+from roomlight.prior.losses import LossConfig  # noqa: E402
+from roomlight.prior.model import ModelConfig  # noqa: E402
+from roomlight.fitting.scene.description import parse_scene  # noqa: E402
+from roomlight.prior.train.config import TrainConfig  # noqa: E402
 
 FUZZ = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

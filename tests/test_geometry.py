@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from roomlight.errors import ShapeError
-from roomlight.geometry import (
+from roomlight.core.geometry import (
     direction_to_uv, latitude_channels, panorama_to_perspective, perspective_to_panorama,
     pixel_directions, pixel_solid_angles, pixel_uv, rotate_panorama, rotation_matrix,
     sample_equirect, spherical_pad, uv_to_direction,

@@ -1,4 +1,4 @@
-"""Growing a prior's latent (roomlight.model.grow): the grown network computes what the trained one
+"""Growing a prior's latent (roomlight.prior.model.grow): the grown network computes what the trained one
 computes, its new dimensions cost no KL, and training from it starts at the old network's loss."""
 
 from __future__ import annotations
@@ -6,11 +6,11 @@ from __future__ import annotations
 import pytest
 import torch
 
-from roomlight.data import write_toy_dataset
+from roomlight.prior.data import write_toy_dataset
 from roomlight.errors import RoomlightError
-from roomlight.model import PRESETS, PanoVAE
-from roomlight.model.grow import can_grow, grow_latent_state
-from roomlight.train import Trainer, get_train_preset, resolve_run_model
+from roomlight.prior.model import PRESETS, PanoVAE
+from roomlight.prior.model.grow import can_grow, grow_latent_state
+from roomlight.prior.train import Trainer, get_train_preset, resolve_run_model
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 

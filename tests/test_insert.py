@@ -16,8 +16,8 @@ from click.testing import CliRunner
 
 from roomlight.cli.main import cli
 from roomlight.errors import RoomlightError
-from roomlight.insert import InsertSpec, insert_objects, load_fitted_photo, parse_material, place_object
-from roomlight.insert.objects import surface_at_pixel
+from roomlight.fitting.insert import InsertSpec, insert_objects, load_fitted_photo, parse_material, place_object
+from roomlight.fitting.insert.objects import surface_at_pixel
 
 pytestmark = [pytest.mark.usefixtures("one_torch_thread")]
 
@@ -40,7 +40,7 @@ def test_materials_parse_or_fail_with_the_forms():
 
 def _plane_points(h=20, w=30, height=-1.0):
     """(h, w, 3) camera-frame points of a floor y = ``height`` seen by a camera pitched down 10 degrees."""
-    from roomlight.photo.camera import PhotoCamera, camera_rotation
+    from roomlight.fitting.photo.camera import PhotoCamera, camera_rotation
 
     k = PhotoCamera.from_fov(60.0, w, h)
     rays = k.pixel_rays() @ camera_rotation(-10.0, 0.0).T   # room frame
@@ -137,8 +137,8 @@ def test_a_diffuse_object_in_a_room_of_uniform_radiance_shades_at_albedo_times_r
     L, albedo = 0.6, 0.5
     h, w = fitted.radiance.shape[:2]
     # The room's surfaces well outside the depth mesh, so the local scene sits inside the light.
-    from roomlight.examples import example_room
-    from roomlight.light import Light
+    from roomlight.core.examples import example_room
+    from roomlight.core.light import Light
 
     _, room_depth = example_room(h)
     fitted.light = Light(torch.full((h, w, 3), L), room_depth * 3.0, "mesh", fitted.light.frame)
@@ -166,7 +166,7 @@ def test_export_of_a_photo_fit_carries_the_camera_the_depth_mesh_and_the_backpla
         assert (fitted_dir / "export" / name).is_file(), name
     from pxr import Usd, UsdGeom
 
-    from roomlight.insert import load_fitted_photo
+    from roomlight.fitting.insert import load_fitted_photo
 
     fitted = load_fitted_photo(fitted_dir)
     stage = Usd.Stage.Open(str(usd))
@@ -234,7 +234,7 @@ def test_viewer_of_a_photo_fit_shows_the_photograph_and_the_probe_shading_follow
     np.testing.assert_allclose(region(a, right, top, iw, ih), region(b, right, top, iw, ih), atol=1,
                                err_msg="under the env map the probe's shading does not depend on its position")
     # the backdrop: the main view (letterboxed to 4:3 in the 900 x 500 window) shows the photograph
-    from roomlight.color import linear_to_srgb
+    from roomlight.core.color import linear_to_srgb
 
     photo = np.rint(linear_to_srgb(np.clip(load_fitted_photo(fitted_dir).case.image, 0, 1)) * 255)
     vh, vw = 500, round(500 * 32 / 24)

@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 from safetensors.torch import load_file
 
-from roomlight.data import write_toy_dataset
+from roomlight.prior.data import write_toy_dataset
 
 ENV = {**os.environ, "OMP_NUM_THREADS": "1", "ROOMLIGHT_THREADS": "1",
        "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[1] / "src"), os.environ.get("PYTHONPATH", "")])}
@@ -203,7 +203,7 @@ def test_train_killed_before_its_first_checkpoint_starts_afresh(toy, straight_ru
 def test_sigint_and_sigterm_are_both_deferred_to_the_end_of_the_step(sig):
     """The training loops' handler: the first signal only records itself, a second one stops at once
     (not at a step boundary), and the previous handlers come back afterwards."""
-    from roomlight.train.interrupt import Interrupted, deferred_interrupts
+    from roomlight.prior.train.interrupt import Interrupted, deferred_interrupts
 
     before = signal.getsignal(sig)
     notes = []
@@ -227,7 +227,7 @@ ALL_SIGNALS = pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL], id
 
 def exr_pixels(root: Path, pattern: str) -> dict:
     """{relative path: {channel: array}} of every finished EXR under ``root``."""
-    from roomlight.io import read_exr
+    from roomlight.core.io import read_exr
 
     return {p.relative_to(root).as_posix(): read_exr(p) for p in sorted(root.glob(pattern))
             if ".partial" not in p.name and not p.name.startswith(".")}

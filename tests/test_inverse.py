@@ -6,12 +6,12 @@ from pathlib import Path
 import pytest
 import torch
 
-from roomlight.inverse import (
+from roomlight.fitting.inverse import (
     DirectLight, FitConfig, build_fitter, censor, clearance, fit_scene, image_loss, make_light,
     repulsion_penalty, smoothness,
 )
-from roomlight.inverse.config import fit_config
-from roomlight.inverse.fitter import mask_window
+from roomlight.fitting.inverse.config import fit_config
+from roomlight.fitting.inverse.fitter import mask_window
 from roomlight.errors import RoomlightError
 
 from helpers_scene import make_tiny_scene
@@ -129,8 +129,8 @@ def test_repulsion_keeps_every_object_of_the_scene_inside_the_emitter(tiny):
 
     import numpy as np
 
-    from roomlight.inverse import repulsion_penalty
-    from roomlight.scene.description import parse_scene
+    from roomlight.fitting.inverse import repulsion_penalty
+    from roomlight.fitting.scene.description import parse_scene
 
     scene, _, _ = tiny
     root = Path(scene.views["input"].image).parent
@@ -210,7 +210,7 @@ def test_direct_al_from_truth_stays_and_from_constant_improves(tiny, tmp_path):
 
 @pytest.mark.mitsuba
 def test_prior_fit_with_tiny_model_runs_and_lowers_the_loss(tiny, tmp_path):
-    from roomlight.model import ModelConfig, Normalization, PanoVAE
+    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
 
     scene, rad, depth = tiny
     torch.manual_seed(0)
@@ -241,7 +241,7 @@ def test_prior_fit_moves_the_latent_and_beats_exposure_alone(side_lit):
     room), and ends with a non-zero z. A decoder cut off from z (z detached) fails this test,
     although exposure alone still lowers the loss."""
     from roomlight.demo import bundled_prior_path
-    from roomlight.model import PanoVAE
+    from roomlight.prior.model import PanoVAE
 
     scene, _, _ = side_lit
     model = PanoVAE.from_pretrained(bundled_prior_path())
@@ -279,7 +279,7 @@ def test_nonfinite_gradients_are_skipped_not_applied(tiny):
 
 def test_a_recovered_light_with_one_runaway_texel_is_flagged():
     """A plausible room passes; the same room with one texel at 1e6 (as a mirror fit once grew) is flagged."""
-    from roomlight.inverse.outputs import EXTREME_CONTRAST, extreme_light_note, light_summary
+    from roomlight.fitting.inverse.outputs import EXTREME_CONTRAST, extreme_light_note, light_summary
 
     gen = torch.Generator().manual_seed(0)
     room = 0.5 + torch.rand(16, 32, 3, generator=gen)  # luminance 0.5-1.5
@@ -300,7 +300,7 @@ def test_the_light_note_is_read_from_the_recorded_result(tmp_path):
     """The command line's note follows the ``light`` written in result.json, not a second measurement."""
     import json
 
-    from roomlight.inverse.outputs import light_summary, recorded_light_note
+    from roomlight.fitting.inverse.outputs import light_summary, recorded_light_note
 
     room = torch.full((8, 16, 3), 0.5)
     runaway = room.clone()

@@ -1,4 +1,4 @@
-"""Tests for roomlight.io: file formats and round trips.
+"""Tests for roomlight.core.io: file formats and round trips.
 
 Independent references: Mitsuba's own RGBE reader (``mi.Bitmap``) and PLY loader, Pillow for
 16-bit PNGs, the OpenEXR binding for header attributes and pixel types.
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from roomlight.errors import InputFileError, ShapeError
-from roomlight.io import (
+from roomlight.core.io import (
     Panorama,
     read_depth,
     read_exr,

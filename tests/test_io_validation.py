@@ -1,4 +1,4 @@
-"""Tests for roomlight.io: validation messages, previews, exposure calibration.
+"""Tests for roomlight.core.io: validation messages, previews, exposure calibration.
 
 Independent references: Mitsuba's own RGBE reader (``mi.Bitmap``) and PLY loader, Pillow for
 16-bit PNGs, the OpenEXR binding for header attributes and pixel types.
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from roomlight.errors import InputFileError, RoomlightError, ShapeError
-from roomlight.io import (
+from roomlight.core.io import (
     Panorama,
     calibrate_panorama,
     colorize_depth,
@@ -224,7 +224,7 @@ def test_tonemap_gamma_values_and_torch_layout(rng):
 
 
 def test_auto_exposure_maps_the_log_average_to_middle_grey():
-    from roomlight.io.preview import auto_exposure_stops
+    from roomlight.core.io.preview import auto_exposure_stops
 
     rad = np.zeros((2, 4, 3), np.float32)
     rad[0, :2] = 2.0      # luminance 2 (grey)

@@ -15,28 +15,33 @@ import roomlight
 
 PACKAGE = Path(roomlight.__file__).parent
 
-#: Top to bottom. Names are subpackages or top-level modules of ``roomlight``.
+#: The groups that hold the pipeline's stages; their subpackages and modules are the layer units, and the
+#: group packages themselves only describe what they hold (they import nothing).
+GROUPS = ("core", "prior", "fitting", "datagen", "evaluation")
+
+#: Top to bottom. Names are top-level modules or subpackages of ``roomlight``, or a group's subpackages
+#: and modules (``core.io``).
 LAYERS = [
     ["cli"],
-    ["demo", "experiments"],
-    ["viewenc"],
-    ["train", "parallax"],
+    ["demo", "evaluation.experiments"],
+    ["prior.viewenc"],
+    ["prior.train", "parallax"],
     ["viewer"],
-    ["photobench"],
+    ["evaluation.photobench"],
     ["export"],
-    ["insert"],
-    ["eval", "bench", "synth", "prepare"],
-    ["evaluate"],
-    ["photo"],
-    ["inverse", "data"],
-    ["scene", "fit", "model", "examples"],
-    ["losses"],
-    ["render"],
-    ["emitter"],
-    ["io"],
-    ["light"],
-    ["geometry"],
-    ["color", "config", "progress", "cluster", "stats", "cpu", "methods"],
+    ["fitting.insert"],
+    ["prior.eval", "evaluation.bench", "datagen.synth", "datagen.prepare"],
+    ["evaluation.harness"],
+    ["fitting.photo"],
+    ["fitting.inverse", "prior.data"],
+    ["fitting.scene", "prior.latent_fit", "prior.model", "core.examples"],
+    ["prior.losses"],
+    ["core.render"],
+    ["core.emitter"],
+    ["core.io"],
+    ["core.light"],
+    ["core.geometry"],
+    ["core.color", "core.config", "core.progress", "core.cluster", "core.stats", "core.cpu", "fitting.methods"],
     ["errors"],
 ]
 
@@ -76,12 +81,21 @@ def _graph() -> dict[str, set[str]]:
 
 
 def _unit(module: str) -> str:
-    """The layer unit of a module: its subpackage, or the top-level module itself."""
-    return module.split(".")[1]
+    """The layer unit of a module: its subpackage or top-level module; inside a group, the group's
+    subpackage or module (``roomlight.core.io.exr`` -> ``core.io``)."""
+    parts = module.split(".")
+    return ".".join(parts[1:3]) if parts[1] in GROUPS and len(parts) > 2 else parts[1]
+
+
+def test_the_groups_only_describe_what_they_hold():
+    for group in GROUPS:
+        tree = ast.parse((PACKAGE / group / "__init__.py").read_text())
+        assert ast.get_docstring(tree), f"roomlight.{group} has no docstring"
+        assert all(isinstance(n, ast.Expr) for n in tree.body), f"roomlight.{group}/__init__.py does more than describe"
 
 
 def test_every_subpackage_and_top_level_module_has_a_layer():
-    units = {_unit(m) for m in _modules() if m != "roomlight"}
+    units = {_unit(m) for m in _modules() if m != "roomlight" and m.split(".")[1:] not in ([g] for g in GROUPS)}
     placed = {u for layer in LAYERS for u in layer}
     assert units - {"assets"} == placed, (
         f"not in LAYERS: {sorted(units - placed)}; in LAYERS but gone: {sorted(placed - units)}")
@@ -91,7 +105,7 @@ def test_no_import_goes_up_or_sideways_a_layer():
     rank = {u: i for i, layer in enumerate(LAYERS) for u in layer}
     bad = []
     for module, targets in _graph().items():
-        if module == "roomlight":
+        if module == "roomlight" or module.split(".")[1:] in ([g] for g in GROUPS):
             continue
         for target in targets:
             a, b = _unit(module), _unit(target)
@@ -132,7 +146,7 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 
 def test_no_import_cycle_between_modules():
-    # Imports through a package (``from roomlight.io import save_png``) count as edges to the
+    # Imports through a package (``from roomlight.core.io import save_png``) count as edges to the
     # package's __init__, which imports its modules: a module that imports its own package
     # therefore shows up as a cycle, as it should (it only works by import order).
     assert _cycles(_graph()) == []

@@ -1,4 +1,4 @@
-"""roomlight.light.Light: validation, its frame, numpy <-> torch; and the photo camera's projection."""
+"""roomlight.core.light.Light: validation, its frame, numpy <-> torch; and the photo camera's projection."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import pytest
 import torch
 
 from roomlight.errors import RoomlightError, ShapeError
-from roomlight.light import EmitterKind, Light, similarity_parts
-from roomlight.photo.camera import PhotoCamera
+from roomlight.core.light import EmitterKind, Light, similarity_parts
+from roomlight.fitting.photo.camera import PhotoCamera
 
 
 def _maps(h: int = 4):

@@ -1,4 +1,4 @@
-"""Tests of the training losses (roomlight.losses) against hand-computed values and slow loops."""
+"""Tests of the training losses (roomlight.prior.losses) against hand-computed values and slow loops."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from roomlight.errors import ShapeError
-from roomlight.losses import (
+from roomlight.prior.losses import (
     LossConfig,
     gradient_loss,
     kl_divergence,
@@ -20,7 +20,7 @@ from roomlight.losses import (
     top_fraction_mask,
     vae_loss,
 )
-from roomlight.model import Normalization
+from roomlight.prior.model import Normalization
 
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -266,7 +266,7 @@ def test_vae_loss_combines_terms_with_paper_weights():
 
 
 def test_peak_loss_per_sample_is_each_panoramas_own_peak_loss():
-    from roomlight.losses import peak_loss_per_sample
+    from roomlight.prior.losses import peak_loss_per_sample
 
     g = torch.Generator().manual_seed(3)
     pred = torch.rand(3, 3, 8, 16, generator=g) * torch.tensor([1.0, 5.0, 50.0]).view(3, 1, 1, 1)

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 import torch
 
-from roomlight.model.normalization import Normalization
-from roomlight.model.veni import VENI_PRESETS, VeniVAE
+from roomlight.prior.model.normalization import Normalization
+from roomlight.prior.model.veni import VENI_PRESETS, VeniVAE
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
@@ -32,7 +32,7 @@ def test_split_decoding_with_one_latent_is_the_models_decoding():
 
 
 def test_the_script_reports_mean_samples_and_the_split_row(tmp_path, capsys):
-    from roomlight.data import write_toy_dataset
+    from roomlight.prior.data import write_toy_dataset
 
     write_toy_dataset(tmp_path / "data", 6, height=16)
     torch.manual_seed(0)

@@ -6,13 +6,13 @@ import pytest
 import torch
 
 from roomlight.errors import RoomlightError
-from roomlight.methods import FIT, PHOTO, METHODS, default_run, is_reference, method, methods_for, needs_prior
+from roomlight.fitting.methods import FIT, PHOTO, METHODS, default_run, is_reference, method, methods_for, needs_prior
 
 from helpers_scene import make_tiny_scene
 
 
 def tiny_prior():
-    from roomlight.model import ModelConfig, Normalization, PanoVAE
+    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
 
     torch.manual_seed(0)
     norm = Normalization(mean=torch.tensor([0.5, 0.5, 0.5, 1.0]), std=torch.tensor([0.5, 0.5, 0.5, 0.3]))
@@ -22,7 +22,7 @@ def tiny_prior():
 @pytest.mark.mitsuba
 def test_each_scene_method_builds_the_light_its_record_names(tmp_path):
     """``make_light`` is the code that acts on the record: its light's kind must be the record's."""
-    from roomlight.inverse import FitConfig, make_light
+    from roomlight.fitting.inverse import FitConfig, make_light
 
     scene, _, _ = make_tiny_scene(tmp_path, height=8, res=16, spp=4)
     prior = tiny_prior()

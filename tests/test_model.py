@@ -1,4 +1,4 @@
-"""Tests of the prior's network, normalisation and checkpoint formats (roomlight.model).
+"""Tests of the prior's network, normalisation and checkpoint formats (roomlight.prior.model).
 
 The authors' format has its own file, test_model_authors.py.
 """
@@ -13,8 +13,8 @@ import torch
 import torch.nn.functional as F
 
 from roomlight.errors import InputFileError, RoomlightError, ShapeError
-from roomlight.model import DiagonalGaussian, ModelConfig, Normalization, PanoVAE, get_preset
-from roomlight.model.blocks import AdaGN, AdaGNResBlock, ResBlock, SphericalConv2d, Upsample
+from roomlight.prior.model import DiagonalGaussian, ModelConfig, Normalization, PanoVAE, get_preset
+from roomlight.prior.model.blocks import AdaGN, AdaGNResBlock, ResBlock, SphericalConv2d, Upsample
 from test_model_authors import ref_spherical_pad
 
 # A 4-stage config (like the paper's) that is cheap: downsampling factor 16, bottleneck 2 x 4.

@@ -1,4 +1,4 @@
-"""The paper authors' checkpoint format (roomlight.model.convert): layout, loading, conversion.
+"""The paper authors' checkpoint format (roomlight.prior.model.convert): layout, loading, conversion.
 
 The parity test compares the package against an independent functional forward written here
 from the spec (docs/model.md, "The authors' run folder"), using only F.conv2d, F.group_norm and
@@ -14,7 +14,7 @@ import torch
 import torch.nn.functional as F
 
 from roomlight.errors import InputFileError
-from roomlight.model import (
+from roomlight.prior.model import (
     AUTHORS_NORMALIZATION,
     ModelConfig,
     PanoVAE,

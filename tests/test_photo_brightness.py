@@ -22,7 +22,7 @@ def _script():
 
 
 def _write_rgb(path: Path, image: np.ndarray) -> None:
-    from roomlight.io.exr import write_exr
+    from roomlight.core.io.exr import write_exr
 
     write_exr(path, {c: image[..., k] for k, c in enumerate("RGB")})
 
@@ -45,12 +45,12 @@ def run(tmp_path, monkeypatch):
             (folder / "result.json").write_text(json.dumps({"case_dir": str(tmp_path / "bench" / photo)}))
             for m, im in renders.items():
                 _write_rgb(folder / f"probes_{m}.exr", im)
-    monkeypatch.setattr("roomlight.photobench.scoring.load_truth", lambda case_dir: truths[str(case_dir)])
+    monkeypatch.setattr("roomlight.evaluation.photobench.scoring.load_truth", lambda case_dir: truths[str(case_dir)])
     return tmp_path / "res", truths
 
 
 def test_the_brightness_ratio_and_the_rescaled_scores(run):
-    from roomlight.evaluate.metrics import score_view
+    from roomlight.evaluation.harness.metrics import score_view
 
     res, truths = run
     table = _script().brightness_table(res, ["dim", "off"])

@@ -16,8 +16,8 @@ pytestmark = pytest.mark.mitsuba
 def photo(tmp_path_factory):
     """A 64 x 48 photograph of two spheres (known principled materials) in a room lit mostly by its
     front wall, with its photo case folder and truth."""
-    from roomlight.photo import load_photo
-    from roomlight.photo.synthetic import read_truth
+    from roomlight.fitting.photo import load_photo
+    from roomlight.fitting.photo.synthetic import read_truth
 
     folder = tmp_path_factory.mktemp("photo") / "case"
     rad, depth = bright_wall_room(16)
@@ -28,13 +28,13 @@ def photo(tmp_path_factory):
 @pytest.fixture(scope="module")
 def prior():
     from roomlight.demo import bundled_prior_path
-    from roomlight.model import PanoVAE
+    from roomlight.prior.model import PanoVAE
 
     return PanoVAE.from_pretrained(bundled_prior_path())
 
 
 def _config(**changes):
-    from roomlight.photo import photo_config
+    from roomlight.fitting.photo import photo_config
 
     base = dict(render_size=64, geometry_size=64, eval_every=10, eval_spp=16, checkpoint_every=0, init_samples=8,
                 placement_steps=100)
@@ -42,7 +42,7 @@ def _config(**changes):
 
 
 def _known_light(truth):
-    from roomlight.inverse.lights import DirectLight
+    from roomlight.fitting.inverse.lights import DirectLight
 
     light = DirectLight("mesh", tuple(truth["radiance"].shape[:2]), init_radiance=truth["radiance"],
                         init_depth=truth["depth"], smooth_radiance=0.0, smooth_depth=0.0)
@@ -56,7 +56,7 @@ def test_albedo_recovered_under_the_known_light(photo, one_torch_thread):
     """With the light and the camera's place in the room known (and each object's roughness and
     metallic held at their true values), fitting the photograph recovers every object's albedo
     to 0.05 per channel from the initial 0.5."""
-    from roomlight.photo import ObjectMaterials, fit_photo
+    from roomlight.fitting.photo import ObjectMaterials, fit_photo
 
     _, case, truth = photo
     materials = ObjectMaterials(case.objects.ids, free=("albedo",))
@@ -75,7 +75,7 @@ def test_albedo_recovered_under_the_known_light(photo, one_torch_thread):
 def test_joint_fit_of_light_and_materials(photo, prior, tmp_path, one_torch_thread):
     """The paper's real-image fit runs: light (z, s) and materials together lower the objective,
     the frustum and repulsion terms take part, and one step of z is at most latent_step_clip long."""
-    from roomlight.photo import fit_photo
+    from roomlight.fitting.photo import fit_photo
 
     _, case, _ = photo
     cfg = _config(iterations=8, spp=4, eval_every=4, frustum_points=64, repulsion_points=64)
@@ -102,8 +102,8 @@ def test_joint_fit_of_light_and_materials(photo, prior, tmp_path, one_torch_thre
 def test_interrupted_fit_resumes_where_it_stopped(photo, prior, tmp_path, monkeypatch, one_torch_thread):
     """A fit interrupted after its fourth iteration and run again continues from the saved state
     and ends where an uninterrupted fit ends."""
-    from roomlight.photo import fit_photo
-    from roomlight.photo.fitter import STATE_FILE, PhotoFitter
+    from roomlight.fitting.photo import fit_photo
+    from roomlight.fitting.photo.fitter import STATE_FILE, PhotoFitter
 
     _, case, _ = photo
     cfg = _config(iterations=6, spp=2, eval_every=3, checkpoint_every=2, frustum_points=32, repulsion_points=32,
@@ -159,10 +159,10 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
     prior the paper's start reached 0.69 and 0.49 and the env map 1.11 and 1.52). From the view start the
     prior's env map is as good on this small scene (0.20 and 0.19, measured without the reflectance prior),
     so the claim above holds in the paper's setting only."""
-    from roomlight.light import Light
-    from roomlight.photo import fit_photo
-    from roomlight.photo.outputs import light_view
-    from roomlight.photo.probes import LightView, ProbeSite, closeup_disc, render_probes
+    from roomlight.core.light import Light
+    from roomlight.fitting.photo import fit_photo
+    from roomlight.fitting.photo.outputs import light_view
+    from roomlight.fitting.photo.probes import LightView, ProbeSite, closeup_disc, render_probes
 
     _, case, truth = photo
     cfg = _config(iterations=120, spp=8, init="samples")
@@ -200,7 +200,7 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
 def test_the_view_start_keeps_the_camera_at_the_room_centre(photo, prior, one_torch_thread):
     """From the view encoder's start the decoded room is the camera's: no scale, no shift; from the
     paper's start the scene is placed inside a random room."""
-    from roomlight.photo import fit_photo
+    from roomlight.fitting.photo import fit_photo
 
     _, case, _ = photo
     assert prior.view_encoder is not None                       # the bundled prior ships one

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.color import linear_to_srgb, srgb_to_linear
+from roomlight.core.color import linear_to_srgb, srgb_to_linear
 from roomlight.errors import InputFileError, RoomlightError
-from roomlight.photo.camera import PhotoCamera, camera_rotation
-from roomlight.photo.masks import connected_components, labels_from_array, read_mask, resize_nearest
-from roomlight.photo.unproject import image_mesh, object_mesh, radial_distance, unproject
+from roomlight.fitting.photo.camera import PhotoCamera, camera_rotation
+from roomlight.fitting.photo.masks import connected_components, labels_from_array, read_mask, resize_nearest
+from roomlight.fitting.photo.unproject import image_mesh, object_mesh, radial_distance, unproject
 
 INTRINSICS = {
     "fov": PhotoCamera.from_fov(70.0, 40, 30),
@@ -100,8 +100,8 @@ def test_camera_rotation_pitch_and_roll():
 def test_pinhole_sensor_sees_the_pixel_rays_of_the_intrinsics(mi):
     """Mitsuba's camera built from (fx, cx, cy) shoots, through each pixel centre, the ray the
     unprojection uses (off-centre principal point, level and tilted camera)."""
-    from roomlight.photo.geometry import SceneTransform
-    from roomlight.photo.scene import photo_sensor
+    from roomlight.fitting.photo.geometry import SceneTransform
+    from roomlight.fitting.photo.scene import photo_sensor
 
     k = PhotoCamera(40, 30, 30.0, 30.0, 17.25, 12.5)
     for pitch, roll in [(0.0, 0.0), (-25.0, 10.0)]:
@@ -249,7 +249,7 @@ def test_srgb_transfer_function():
 
 # ---------------------------------------------------------------------------------------- photo cases
 def _write_case(folder, size=(24, 32), kind="z"):
-    from roomlight.photo.case import write_photo_case
+    from roomlight.fitting.photo.case import write_photo_case
 
     h, w = size
     k = PhotoCamera.from_fov(60.0, w, h)
@@ -263,7 +263,7 @@ def _write_case(folder, size=(24, 32), kind="z"):
 
 
 def test_photo_case_round_trip(tmp_path):
-    from roomlight.photo.case import load_photo
+    from roomlight.fitting.photo.case import load_photo
 
     img, depth, labels, k = _write_case(tmp_path / "case", kind="z")
     case = load_photo(tmp_path / "case")
@@ -280,8 +280,8 @@ def test_photo_case_round_trip(tmp_path):
 def test_photo_image_files_srgb_png_and_linear_exr(tmp_path):
     from PIL import Image
 
-    from roomlight.io import write_exr
-    from roomlight.photo.case import read_image
+    from roomlight.core.io import write_exr
+    from roomlight.fitting.photo.case import read_image
 
     rgb8 = np.array([[[0, 128, 255], [64, 64, 64]]], np.uint8)
     Image.fromarray(rgb8).save(tmp_path / "a.png")
@@ -295,7 +295,7 @@ def test_photo_image_files_srgb_png_and_linear_exr(tmp_path):
 
 # ---------------------------------------------------------------------------------------- terms by hand
 def test_frustum_terms_by_hand():
-    from roomlight.photo.frustum import FrustumTarget, frustum_terms
+    from roomlight.fitting.photo.frustum import FrustumTarget, frustum_terms
 
     h, w = 8, 16
     radiance = torch.full((h, w, 3), 0.4)
@@ -318,7 +318,7 @@ def test_frustum_terms_by_hand():
 def test_repulsion_with_frustum_points_by_hand():
     """Object points and free-space points of the view frustum count alike: mean over all of
     max(m - (D - |q|), 0) against a room of constant depth D."""
-    from roomlight.inverse.repulsion import repulsion_penalty
+    from roomlight.fitting.inverse.repulsion import repulsion_penalty
 
     depth = torch.full((16, 32), 2.0)
     objects = torch.tensor([[0.0, -0.5, -1.0], [0.0, 0.0, -1.95]])            # |q| = 1.118, 1.95
@@ -331,9 +331,9 @@ def test_repulsion_with_frustum_points_by_hand():
 
 
 def test_free_space_points_lie_between_the_camera_and_the_surfaces():
-    from roomlight.photo.case import load_photo
-    from roomlight.photo.config import photo_config
-    from roomlight.photo.geometry import build_geometry
+    from roomlight.fitting.photo.case import load_photo
+    from roomlight.fitting.photo.config import photo_config
+    from roomlight.fitting.photo.geometry import build_geometry
 
     import tempfile
     from pathlib import Path
@@ -355,8 +355,8 @@ def test_free_space_points_lie_between_the_camera_and_the_surfaces():
 def test_placement_recovers_a_known_scale_and_position():
     """Points of a box room seen from a known camera position, given in a scaled camera frame, are
     put back where they belong by the frustum depth term."""
-    from roomlight.geometry.analytic import box_distance, box_room_depth
-    from roomlight.photo.placement import place_scene
+    from roomlight.core.geometry.analytic import box_distance, box_room_depth
+    from roomlight.fitting.photo.placement import place_scene
 
     lo, hi = (-2.0, -1.5, -3.5), (3.0, 1.3, 1.5)
     depth = box_room_depth(64, 128, lo, hi)
@@ -382,8 +382,8 @@ def stand_in_estimator(image):
 
 
 def test_estimators_callable_module_function_and_moge_conversion(tmp_path):
-    from roomlight.photo.case import load_photo
-    from roomlight.photo.estimator import MoGeEstimator, as_estimate, resolve_estimator
+    from roomlight.fitting.photo.case import load_photo
+    from roomlight.fitting.photo.estimator import MoGeEstimator, as_estimate, resolve_estimator
 
     _write_case(tmp_path / "case")
     (tmp_path / "case" / "depth.exr").unlink()
@@ -446,7 +446,7 @@ def _fake_moge(monkeypatch, weights: bool):
 
 
 def test_moge_adapter_loads_local_weights_only_and_converts(tmp_path, monkeypatch):
-    from roomlight.photo.case import load_photo
+    from roomlight.fitting.photo.case import load_photo
 
     _write_case(tmp_path / "case")
     (tmp_path / "case" / "depth.exr").unlink()

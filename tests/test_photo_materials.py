@@ -10,7 +10,7 @@ import torch
 
 
 def _materials(albedos, metallics):
-    from roomlight.photo import ObjectMaterials
+    from roomlight.fitting.photo import ObjectMaterials
 
     m = ObjectMaterials(list(range(1, len(albedos) + 1)))
     for label, (a, metal) in enumerate(zip(albedos, metallics), start=1):
@@ -81,8 +81,8 @@ def test_geometric_albedo_prior_never_tints_and_ignores_a_neutral_white_balance(
 
 
 def test_photo_model_adds_the_weighted_prior_to_the_light_regularizers():
-    from roomlight.inverse.lights import LightModel
-    from roomlight.photo.fitter import PhotoModel
+    from roomlight.fitting.inverse.lights import LightModel
+    from roomlight.fitting.photo.fitter import PhotoModel
 
     class Bare(LightModel):
         kind = "envmap"
@@ -105,7 +105,7 @@ def test_photo_model_adds_the_weighted_prior_to_the_light_regularizers():
 ])
 def test_bad_prior_settings_are_refused(field, value, message):
     from roomlight.errors import RoomlightError
-    from roomlight.photo import photo_config
+    from roomlight.fitting.photo import photo_config
 
     with pytest.raises(RoomlightError, match=message.replace("(", r"\(").replace(")", r"\)")):
         photo_config("fast", **{field: value}).validate()
@@ -114,8 +114,8 @@ def test_bad_prior_settings_are_refused(field, value, message):
 def test_photo_fits_use_the_scalar_exposure_by_default_and_synthetic_fits_the_white_balance():
     """The white balance measured worse on photographs (docs/results.md#white-balance) and stays on for
     `roomlight fit`; every photo preset inherits the photo default, and --set can turn it back on."""
-    from roomlight.inverse.config import FitConfig
-    from roomlight.photo import PHOTO_PRESETS, photo_config
+    from roomlight.fitting.inverse.config import FitConfig
+    from roomlight.fitting.photo import PHOTO_PRESETS, photo_config
 
     assert FitConfig().white_balance is True
     assert all(cfg.white_balance is False for cfg in PHOTO_PRESETS.values())

@@ -13,9 +13,9 @@ import torch
 from click.testing import CliRunner
 
 from roomlight.errors import RoomlightError
-from roomlight.photo.camera import PhotoCamera
-from roomlight.photobench.config import PhotoBenchConfig
-from roomlight.photobench.degrade import degrade_depth, smooth_field
+from roomlight.fitting.photo.camera import PhotoCamera
+from roomlight.evaluation.photobench.config import PhotoBenchConfig
+from roomlight.evaluation.photobench.degrade import degrade_depth, smooth_field
 
 #: The smallest photos the staging accepts: a few seconds of rendering each.
 TINY = PhotoBenchConfig(n=1, width=96, height=72, spp=16, probe_spp=128, oracle_height=16, oracle_spp=16, probes=2,
@@ -91,7 +91,7 @@ def test_camera_projects_what_its_rays_see_and_reports_yaw_pitch_roll():
 
 
 def test_case_camera_json_is_the_photo_case_format():
-    from roomlight.photobench.case import camera_json
+    from roomlight.evaluation.photobench.case import camera_json
 
     cam = PhotoCamera.look_at((0, 1.5, 0), (0.3, 0.4, -2.0), 55.0, 80, 60)
     d = camera_json(cam)
@@ -120,8 +120,8 @@ def test_degraded_depth_is_scale_times_a_smooth_lognormal_field():
 
 
 def test_material_errors_by_hand():
-    from roomlight.photobench.objects import PrincipledMaterial
-    from roomlight.photobench.scoring import material_errors
+    from roomlight.evaluation.photobench.objects import PrincipledMaterial
+    from roomlight.evaluation.photobench.scoring import material_errors
 
     truth = {1: PrincipledMaterial((0.2, 0.4, 0.6), 0.3, 0.0), 2: PrincipledMaterial((0.5, 0.5, 0.5), 0.7, 1.0)}
     got = material_errors(truth, {"1": {"albedo": [0.3, 0.4, 0.6], "roughness": 0.5, "metallic": 0.25}})
@@ -140,7 +140,7 @@ def test_settings_refuse_what_cannot_work():
 
 
 def test_similarity_parts_refuse_shear_and_mirror():
-    from roomlight.photobench.scoring import similarity_parts
+    from roomlight.evaluation.photobench.scoring import similarity_parts
 
     m = np.eye(4)
     m[:3, :3] = 2.0 * _rot(40, 10, 0)
@@ -155,10 +155,10 @@ def test_similarity_parts_refuse_shear_and_mirror():
 # ------------------------------------------------------------------------------ Mitsuba: box room
 @pytest.mark.mitsuba
 def test_depth_and_coverage_match_analytic_ray_casts_in_a_box_room(mi):
-    from roomlight.photobench.objects import InsertedObject, PrincipledMaterial
-    from roomlight.photobench.roomscene import RoomScenes
-    from roomlight.photobench.tracing import trace_coverage, trace_depth
-    from roomlight.synth.rooms import box_room
+    from roomlight.evaluation.photobench.objects import InsertedObject, PrincipledMaterial
+    from roomlight.evaluation.photobench.roomscene import RoomScenes
+    from roomlight.evaluation.photobench.tracing import trace_coverage, trace_depth
+    from roomlight.datagen.synth.rooms import box_room
 
     size = (4.0, 2.7, 5.0)
     scenes = RoomScenes(box_room(size), max_depth=3)
@@ -192,7 +192,7 @@ def test_depth_and_coverage_match_analytic_ray_casts_in_a_box_room(mi):
 # ------------------------------------------------------------------------------ a built photo
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
-    from roomlight.photobench.builder import make_photo_benchmark
+    from roomlight.evaluation.photobench.builder import make_photo_benchmark
 
     out = tmp_path_factory.mktemp("photos") / "bench"
     manifest = make_photo_benchmark(out, TINY, progress=False)
@@ -206,8 +206,8 @@ def _case(built):
 
 @pytest.mark.mitsuba
 def test_case_folder_manifest_and_exposure(built):
-    from roomlight.color import log_average_np
-    from roomlight.photobench import case as fmt
+    from roomlight.core.color import log_average_np
+    from roomlight.evaluation.photobench import case as fmt
 
     manifest = json.loads((built / "manifest.json").read_text())
     assert manifest["kind"] == "photos" and [p["id"] for p in manifest["photos"]] == ["photo-00000"]
@@ -237,8 +237,8 @@ def test_case_folder_manifest_and_exposure(built):
 def test_photo_depth_and_masks_agree_with_the_objects_meshes(built):
     """Each object's mesh, ray-cast in numpy: where it is the first hit its distance is the
     photo's depth, it is never in front of that depth, and every pixel labelled k sees object k."""
-    from roomlight.photobench import case as fmt
-    from roomlight.photobench.scoring import load_truth
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.scoring import load_truth
 
     d = _case(built)
     truth = load_truth(d)
@@ -272,13 +272,13 @@ def test_photo_depth_and_masks_agree_with_the_objects_meshes(built):
 
 @pytest.mark.mitsuba
 def test_truth_probes_sit_on_surfaces_fill_their_masks_and_reproduce(built):
-    from roomlight.evaluate.metrics import psnr_ldr
-    from roomlight.photobench import case as fmt
-    from roomlight.photobench.builder import photo_seeds, render_probe_truth
-    from roomlight.photobench.roomscene import RoomScenes
-    from roomlight.photobench.scoring import load_truth
-    from roomlight.photobench.staging import RayCaster
-    from roomlight.synth.rooms import generate_room
+    from roomlight.evaluation.harness.metrics import psnr_ldr
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.builder import photo_seeds, render_probe_truth
+    from roomlight.evaluation.photobench.roomscene import RoomScenes
+    from roomlight.evaluation.photobench.scoring import load_truth
+    from roomlight.evaluation.photobench.staging import RayCaster
+    from roomlight.datagen.synth.rooms import generate_room
 
     d = _case(built)
     truth = load_truth(d)
@@ -325,9 +325,9 @@ def test_truth_probes_sit_on_surfaces_fill_their_masks_and_reproduce(built):
 def test_rerun_skips_and_degraded_depth_changes_only_the_methods_depth(built, tmp_path):
     import hashlib
 
-    from roomlight.photobench import case as fmt
-    from roomlight.photobench.builder import make_photo_benchmark
-    from roomlight.photobench.scoring import load_truth
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.builder import make_photo_benchmark
+    from roomlight.evaluation.photobench.scoring import load_truth
 
     out = tmp_path / "bench"
     shutil.copytree(built, out)
@@ -363,7 +363,7 @@ def test_rerun_skips_and_degraded_depth_changes_only_the_methods_depth(built, tm
 
 # ------------------------------------------------------------------------------ scoring
 def _rolled(light, k):
-    from roomlight.light import Light
+    from roomlight.core.light import Light
 
     return Light(np.roll(light.radiance, k, axis=1), None if light.depth is None else
                  np.roll(light.depth, k, axis=1), light.kind, light.frame)
@@ -371,10 +371,10 @@ def _rolled(light, k):
 
 @pytest.mark.mitsuba
 def test_scoring_gives_near_zero_error_for_the_true_light_and_large_for_wrong_ones(built):
-    from roomlight.geometry.equirect import uv_to_direction
-    from roomlight.photobench.objects import PROBE_MATERIALS
-    from roomlight.light import Light
-    from roomlight.photobench.scoring import load_truth, oracle_light, render_probes, score_light
+    from roomlight.core.geometry.equirect import uv_to_direction
+    from roomlight.evaluation.photobench.objects import PROBE_MATERIALS
+    from roomlight.core.light import Light
+    from roomlight.evaluation.photobench.scoring import load_truth, oracle_light, render_probes, score_light
 
     truth = load_truth(_case(built))
     light = oracle_light(_case(built), "mesh", truth)
@@ -436,7 +436,7 @@ def test_scoring_gives_near_zero_error_for_the_true_light_and_large_for_wrong_on
 def _stand_in_fit(calls):
     """A fit for the runner: the prior gets the oracle light and materials 0.1 rougher than true; the
     env-map baseline a grey env map and albedos 0.05 brighter; anything else fails."""
-    from roomlight.photobench.scoring import load_truth, oracle_light
+    from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
 
     def fit(case_dir, method, preset, out_dir, model=None, progress=False, overrides=None):
         calls.append((Path(case_dir).name, method, preset))
@@ -463,8 +463,8 @@ def _stand_in_fit(calls):
 
 @pytest.mark.mitsuba
 def test_runner_resumes_shards_records_failures_and_the_report_pairs_methods(built, tmp_path):
-    from roomlight.photobench.report import write_photo_report
-    from roomlight.photobench.runner import list_photo_cases, run_photo_benchmark
+    from roomlight.evaluation.photobench.report import write_photo_report
+    from roomlight.evaluation.photobench.runner import list_photo_cases, run_photo_benchmark
 
     res = tmp_path / "res"
     calls = []
@@ -572,10 +572,10 @@ def test_cli_make_run_report_and_one_line_errors(built, tmp_path):
 @pytest.mark.mitsuba
 def test_photo_fit_reads_the_case_as_written(built):
     """The photo fit's loader reads the case folder as the benchmark meant it."""
-    from roomlight.photo.case import load_photo
+    from roomlight.fitting.photo.case import load_photo
 
-    from roomlight.photobench import case as fmt
-    from roomlight.photobench.scoring import load_truth
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.scoring import load_truth
 
     d = _case(built)
     case = load_photo(str(d))
@@ -595,7 +595,7 @@ def test_photo_fit_reads_the_case_as_written(built):
 def test_builds_are_deterministic_and_a_degraded_variant_differs_only_in_depth(built, tmp_path):
     import hashlib
 
-    from roomlight.photobench.builder import make_photo_benchmark
+    from roomlight.evaluation.photobench.builder import make_photo_benchmark
 
     out = tmp_path / "noisy"
     make_photo_benchmark(out, TINY.override(depth_noise=0.05, depth_scale=0.8), progress=False)
@@ -614,11 +614,11 @@ def test_builds_are_deterministic_and_a_degraded_variant_differs_only_in_depth(b
 
 @pytest.mark.mitsuba
 def test_prior_ceiling_and_start_rows_split_the_gap(built, tmp_path, monkeypatch):
-    from roomlight.model import Normalization, PanoVAE
-    from roomlight.model.config import get_preset
-    from roomlight.photobench import adapter, ceiling
-    from roomlight.photobench.report import write_photo_report
-    from roomlight.photobench.runner import run_photo_benchmark
+    from roomlight.prior.model import Normalization, PanoVAE
+    from roomlight.prior.model.config import get_preset
+    from roomlight.evaluation.photobench import adapter, ceiling
+    from roomlight.evaluation.photobench.report import write_photo_report
+    from roomlight.evaluation.photobench.runner import run_photo_benchmark
 
     torch.manual_seed(0)
     prior = PanoVAE(get_preset("tiny"), Normalization((0.5, 0.5, 0.5, 0.7), (0.6, 0.6, 0.6, 0.5))).eval()
@@ -653,7 +653,7 @@ def test_prior_ceiling_and_start_rows_split_the_gap(built, tmp_path, monkeypatch
         seen.update(method=method, init=config.init)
         raise RuntimeError("stop here")
 
-    from roomlight.photo import fitter as fitter_mod
+    from roomlight.fitting.photo import fitter as fitter_mod
 
     monkeypatch.setattr(fitter_mod, "fit_photo", fake_fit_photo)
     with pytest.raises(RuntimeError, match="stop here"):
@@ -663,8 +663,8 @@ def test_prior_ceiling_and_start_rows_split_the_gap(built, tmp_path, monkeypatch
 
 @pytest.mark.mitsuba
 def test_probes_outside_a_small_light_are_counted_and_none_inside_a_large_one(built):
-    from roomlight.light import Light
-    from roomlight.photobench.scoring import load_truth, oracle_light, probes_outside
+    from roomlight.core.light import Light
+    from roomlight.evaluation.photobench.scoring import load_truth, oracle_light, probes_outside
 
     truth = load_truth(_case(built))
     oracle = oracle_light(_case(built), "mesh", truth)
@@ -689,12 +689,12 @@ def test_probes_outside_a_small_light_are_counted_and_none_inside_a_large_one(bu
 def test_inserted_objects_have_their_truth_and_the_oracle_composites_them_better_than_a_naive_paste(built):
     """truth/insert.exr is the photo wherever the new objects change nothing (same seed and samples),
     and under the oracle light differential rendering scores above pasting the objects lit alone."""
-    from roomlight.photobench import case as fmt
-    from roomlight.photobench.insertion import composite_for_light, insertion_scores, naive_light, read_insert_truth
-    from roomlight.photobench.roomscene import RoomScenes
-    from roomlight.photobench.scoring import load_truth, oracle_light
-    from roomlight.photobench.tracing import trace_image
-    from roomlight.synth.rooms import generate_room
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.insertion import composite_for_light, insertion_scores, naive_light, read_insert_truth
+    from roomlight.evaluation.photobench.roomscene import RoomScenes
+    from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
+    from roomlight.evaluation.photobench.tracing import trace_image
+    from roomlight.datagen.synth.rooms import generate_room
 
     case = _case(built)
     image, labels, objects = read_insert_truth(case / fmt.TRUTH)

@@ -14,12 +14,12 @@ import pytest
 import torch
 from click.testing import CliRunner
 
-from roomlight.color import luminance_np
-from roomlight.data.toy import toy_panorama
+from roomlight.core.color import luminance_np
+from roomlight.prior.data.toy import toy_panorama
 from roomlight.errors import RoomlightError
-from roomlight.prepare import (DisplayMap, SyntheticEstimator, detect_nadir_cap, estimate_panorama_depth,
+from roomlight.datagen.prepare import (DisplayMap, SyntheticEstimator, detect_nadir_cap, estimate_panorama_depth,
                                inpaint_nadir, resolve_inpainter)
-from roomlight.prepare.fusion import floor_distance
+from roomlight.datagen.prepare.fusion import floor_distance
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
@@ -200,7 +200,7 @@ def test_lama_adapter_explains_what_is_missing(monkeypatch, tmp_path):
 
 
 def test_moge_adapter_and_unknown_names_explain_what_is_missing(monkeypatch, tmp_path):
-    from roomlight.prepare import resolve_estimator
+    from roomlight.datagen.prepare import resolve_estimator
 
     monkeypatch.setitem(sys.modules, "moge", None)
     with pytest.raises(RoomlightError, match="MoGe package"):
@@ -317,7 +317,7 @@ def test_a_callable_estimator_with_invalid_pixels_is_fused_and_filled():
 
 
 def _write_inputs(root):
-    from roomlight.io import write_exr, write_panorama
+    from roomlight.core.io import write_exr, write_panorama
 
     root.mkdir()
     names = []
@@ -345,7 +345,7 @@ def _write_inputs(root):
 @pytest.mark.slow
 def test_prepare_command_end_to_end(tmp_path):
     from roomlight.cli.main import cli
-    from roomlight.io import read_panorama
+    from roomlight.core.io import read_panorama
 
     inp = tmp_path / "in"
     names = _write_inputs(inp)
@@ -406,7 +406,7 @@ def test_prepare_command_refuses_bad_options(tmp_path):
 
 @pytest.mark.mitsuba
 def test_synth_nadir_cap_blacks_out_exactly_the_cap(mi):
-    from roomlight.synth.dataset import render_room
+    from roomlight.datagen.synth.dataset import render_room
 
     rad0, depth0, meta0 = render_room(3, height=16, spp=4)
     rad1, depth1, meta1 = render_room(3, height=16, spp=4, nadir_cap=25.0)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 import time
 
-from roomlight.progress import progress_bar
+from roomlight.core.progress import progress_bar
 
 
 class _Terminal(io.StringIO):

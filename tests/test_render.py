@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.geometry import box_room_depth, panorama_to_perspective, pixel_directions
-from roomlight.emitter.area_light import build_area_light
-from roomlight.render.bridge import render_differentiable
-from roomlight.render.camera import perspective_sensor
-from roomlight.render.scene import EmitterScene
-from roomlight.render.variant import mitsuba
+from roomlight.core.geometry import box_room_depth, panorama_to_perspective, pixel_directions
+from roomlight.core.emitter.area_light import build_area_light
+from roomlight.core.render.bridge import render_differentiable
+from roomlight.core.render.camera import perspective_sensor
+from roomlight.core.render.scene import EmitterScene
+from roomlight.core.render.variant import mitsuba
 
 pytestmark = pytest.mark.mitsuba
 
@@ -143,7 +143,7 @@ def test_irradiance_matches_independent_quadrature(mi):
     depth = box_room_depth(h, w, (-2, -1.3, -2.5), (2.5, 1.4, 2))
     mesh = build_area_light(tex.double(), depth.double())
     V, F, UV = mesh.vertices.numpy(), mesh.faces.numpy(), mesh.uv.double().numpy()
-    from roomlight.geometry import uv_to_direction
+    from roomlight.core.geometry import uv_to_direction
     # the patch's direction from the capture point; measure facing it from two points
     pdir = uv_to_direction(torch.tensor(21.0 / w, dtype=torch.float64), torch.tensor(6.0 / h, dtype=torch.float64)).numpy()
     points = [np.zeros(3), 0.5 * pdir + np.array([0.0, -0.2, 0.1])]
@@ -232,7 +232,7 @@ def test_bridge_gradients_match_finite_differences(mi):
 def test_mitsuba_mesh_holds_the_arrays_it_is_given(mi):
     """A 2 m x 1 m emissive quad built from arrays: its area, normals and texture coordinates are
     the given ones, and a camera looking at it sees its radiance (Mitsuba's own definitions)."""
-    from roomlight.render.mesh import mitsuba_mesh
+    from roomlight.core.render.mesh import mitsuba_mesh
 
     v = np.array([[-1, -0.5, -3], [1, -0.5, -3], [1, 0.5, -3], [-1, 0.5, -3]], np.float64)
     f = np.array([[0, 1, 2], [0, 2, 3]])

@@ -11,12 +11,12 @@ import pytest
 import torch
 from click.testing import CliRunner
 
-from roomlight.data import PanoramaDataset, find_panoramas, toy_panorama, write_toy_dataset
-from roomlight.eval.samples import (CAMERA_TARGET, decode_latents, interpolate_latents, probe_layout, render_probes,
+from roomlight.prior.data import PanoramaDataset, find_panoramas, toy_panorama, write_toy_dataset
+from roomlight.prior.eval.samples import (CAMERA_TARGET, decode_latents, interpolate_latents, probe_layout, render_probes,
                                     sample_latents)
-from roomlight.geometry.equirect import pixel_directions
-from roomlight.io import read_exr, read_panorama
-from roomlight.model import Normalization, PanoVAE, get_preset
+from roomlight.core.geometry.equirect import pixel_directions
+from roomlight.core.io import read_exr, read_panorama
+from roomlight.prior.model import Normalization, PanoVAE, get_preset
 
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")

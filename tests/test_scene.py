@@ -8,16 +8,16 @@ import math
 import numpy as np
 import pytest
 
-from roomlight.examples import example_room
-from roomlight.io import save_png, write_exr, write_panorama, write_ply
-from roomlight.scene import (
+from roomlight.core.examples import example_room
+from roomlight.core.io import save_png, write_exr, write_panorama, write_ply
+from roomlight.fitting.scene import (
     BUILTIN_SHAPES,
     SceneError,
     builtin_shape,
     load_scene,
     save_scene,
 )
-from roomlight.scene.description import MATERIAL_TYPES, ObjectSpec, parse_scene
+from roomlight.fitting.scene.description import MATERIAL_TYPES, ObjectSpec, parse_scene
 
 from helpers_bsdf import (conductor_f0, direction, fresnel_conductor, fresnel_dielectric, microfacet_reflection,
                           principled, reflect, rough_interface)
@@ -110,7 +110,7 @@ def test_defaults_are_filled(scene_dir):
 
 
 def test_object_transform_is_scale_rotate_translate():
-    from roomlight.scene.build import object_geometry
+    from roomlight.fitting.scene.build import object_geometry
 
     o = ObjectSpec("o", shape="spiky", translate=(1.0, 2.0, 3.0), scale=0.5, rotate=(0.0, 1.0, 0.0, 90.0))
     v, f = object_geometry(o)
@@ -152,7 +152,7 @@ def _sample(mi, bsdf, wi, s1=0.5, s2=(0.3, 0.6)):
 
 
 def _load(mi, spec):
-    from roomlight.scene.description import MaterialSpec
+    from roomlight.fitting.scene.description import MaterialSpec
 
     return mi.load_dict(MaterialSpec.parse(spec, "m").bsdf())
 
@@ -389,7 +389,7 @@ def test_scene_file_problems(tmp_path):
 
 @pytest.mark.mitsuba
 def test_corrupt_mesh_is_rejected_naming_the_file(scene_dir, mi):
-    from roomlight.scene.build import object_geometry
+    from roomlight.fitting.scene.build import object_geometry
 
     root, data = scene_dir
     path = _write(root, data)
@@ -415,7 +415,7 @@ def test_corrupt_panorama_is_rejected_naming_the_file(scene_dir):
 
 
 def test_unreadable_or_mismatched_view_files_are_rejected_naming_the_file(scene_dir):
-    from roomlight.scene.build import load_view_target
+    from roomlight.fitting.scene.build import load_view_target
 
     root, data = scene_dir
     scene = load_scene(_write(root, data))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.geometry import box_distance, pixel_directions
+from roomlight.core.geometry import box_distance, pixel_directions
 
 pytestmark = pytest.mark.mitsuba
 
@@ -22,7 +22,7 @@ def _box_scene(mi, lo, hi, emit=None):
 
 
 def test_depth_equals_analytic_ray_box_distance(mi):
-    from roomlight.synth.camera import render_depth
+    from roomlight.datagen.synth.camera import render_depth
 
     lo, hi, origin = (-2.0, -1.4, -3.1), (2.6, 1.2, 1.7), (0.3, 0.1, -0.4)
     scene = _box_scene(mi, lo, hi)
@@ -32,14 +32,14 @@ def test_depth_equals_analytic_ray_box_distance(mi):
 
 
 def test_closed_emissive_room_with_zero_albedo_renders_one(mi):
-    from roomlight.synth.camera import render_radiance
+    from roomlight.datagen.synth.camera import render_radiance
 
     scene = _box_scene(mi, (-2, -1.5, -2.5), (3, 1.5, 2), emit=1.0)
     rad = render_radiance(scene, (0.2, 0.0, -0.3), height=16, spp=16, seed=3)
     assert np.allclose(rad, 1.0, atol=1e-5)
 
 
-# -- generator, scene builder and window portals (roomlight.synth internals) ---------------------
+# -- generator, scene builder and window portals (roomlight.datagen.synth internals) ---------------------
 
 def _rotated_directions(h, yaw):
     d = pixel_directions(h, 2 * h, dtype=torch.float64)
@@ -50,9 +50,9 @@ def _rotated_directions(h, yaw):
 
 def test_depth_of_built_box_room_with_yaw(mi):
     """The room builder's shell (quads with 1 mm overlaps) and the yaw convention."""
-    from roomlight.synth.camera import render_depth
-    from roomlight.synth.rooms import box_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.datagen.synth.camera import render_depth
+    from roomlight.datagen.synth.rooms import box_room
+    from roomlight.datagen.synth.scene import build_scene
 
     yaw = 0.7
     room = box_room(size=(4.2, 2.6, 5.3), capture=(1.1, 1.5, 3.2), yaw=yaw, light=False)
@@ -62,9 +62,9 @@ def test_depth_of_built_box_room_with_yaw(mi):
 
 
 def test_built_emissive_box_room_with_zero_albedo_renders_one(mi):
-    from roomlight.synth.camera import render_radiance
-    from roomlight.synth.rooms import box_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.datagen.synth.camera import render_radiance
+    from roomlight.datagen.synth.rooms import box_room
+    from roomlight.datagen.synth.scene import build_scene
 
     room = box_room(albedo=(0.0, 0.0, 0.0), emission=(1.0, 1.0, 1.0))
     rad = render_radiance(build_scene(room), room.capture, height=16, spp=4, seed=1, yaw=0.3)

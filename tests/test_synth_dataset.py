@@ -10,7 +10,7 @@ pytestmark = pytest.mark.mitsuba
 
 @pytest.fixture(scope="module")
 def small_set(tmp_path_factory):
-    from roomlight.synth.dataset import SynthConfig, generate_dataset
+    from roomlight.datagen.synth.dataset import SynthConfig, generate_dataset
 
     out = tmp_path_factory.mktemp("rooms")
     summary = generate_dataset(out, SynthConfig(n=4, seed0=10, height=8, spp=4), progress=False)
@@ -22,8 +22,8 @@ def _digest(p):
 
 
 def test_same_seed_same_file_and_different_seeds_differ(small_set, tmp_path):
-    from roomlight.io import read_panorama
-    from roomlight.synth.dataset import SynthConfig, generate_dataset
+    from roomlight.core.io import read_panorama
+    from roomlight.datagen.synth.dataset import SynthConfig, generate_dataset
 
     out, summary = small_set
     assert summary["failed"] == {} and summary["rendered"] == 4
@@ -38,7 +38,7 @@ def test_same_seed_same_file_and_different_seeds_differ(small_set, tmp_path):
 
 
 def test_resume_skips_finished_samples(small_set):
-    from roomlight.synth.dataset import SynthConfig, generate_dataset
+    from roomlight.datagen.synth.dataset import SynthConfig, generate_dataset
 
     out, _ = small_set
     s = generate_dataset(out, SynthConfig(n=4, seed0=10, height=8, spp=4), progress=False)
@@ -47,7 +47,7 @@ def test_resume_skips_finished_samples(small_set):
 
 def test_resume_with_other_shape_or_splits_is_refused(small_set):
     from roomlight.errors import RoomlightError
-    from roomlight.synth.dataset import SynthConfig, generate_dataset
+    from roomlight.datagen.synth.dataset import SynthConfig, generate_dataset
 
     out, _ = small_set
     before = sorted(p.name for p in out.glob("*/room-*.exr"))
@@ -82,7 +82,7 @@ def test_cli_denoises_by_default_when_pyoidn_is_there(tmp_path, monkeypatch):
 
 
 def test_splits_and_shards_partition_the_seed_range():
-    from roomlight.synth.dataset import split_of
+    from roomlight.datagen.synth.dataset import split_of
 
     n, seed0 = 50, 100
     splits = [split_of(s, seed0, n) for s in range(seed0, seed0 + n)]
@@ -94,7 +94,7 @@ def test_splits_and_shards_partition_the_seed_range():
 
 
 def test_rooms_are_lit_finite_and_positive(small_set):
-    from roomlight.io import read_panorama
+    from roomlight.core.io import read_panorama
 
     out, _ = small_set
     for f in sorted(out.glob("*/room-*.exr")):
@@ -109,7 +109,7 @@ def test_rooms_are_lit_finite_and_positive(small_set):
 
 def test_bad_arguments_are_clean_errors(tmp_path):
     from roomlight.errors import RoomlightError
-    from roomlight.synth.dataset import SynthConfig, generate_dataset
+    from roomlight.datagen.synth.dataset import SynthConfig, generate_dataset
 
     with pytest.raises(RoomlightError, match="perfect square"):
         generate_dataset(tmp_path, SynthConfig(n=1, height=8, spp=10), progress=False)
@@ -120,8 +120,8 @@ def test_bad_arguments_are_clean_errors(tmp_path):
 def test_every_lighting_scenario_renders_a_valid_panorama():
     """One room per scenario (sunny, overcast, dusk, night, interior): finite, non-negative
     radiance reaching most of the panorama, positive finite depth."""
-    from roomlight.synth.dataset import render_room
-    from roomlight.synth.rooms import generate_room
+    from roomlight.datagen.synth.dataset import render_room
+    from roomlight.datagen.synth.rooms import generate_room
 
     want, seeds = {"sunny", "overcast", "dusk", "night", "interior"}, {}
     for seed in range(60):

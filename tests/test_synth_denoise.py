@@ -26,7 +26,7 @@ def test_denoiser_missing_is_reported_with_the_fix(monkeypatch):
     import sys
 
     from roomlight.errors import RoomlightError
-    from roomlight.synth.denoise import denoise_available, denoise_panorama
+    from roomlight.datagen.synth.denoise import denoise_available, denoise_panorama
 
     monkeypatch.setitem(sys.modules, "pyoidn", None)  # makes `import pyoidn` raise ImportError
     assert not denoise_available()
@@ -36,7 +36,7 @@ def test_denoiser_missing_is_reported_with_the_fix(monkeypatch):
 
 def test_denoiser_keeps_light_sources_and_the_seam():
     # pyoidn is in the test extra (`make setup` installs it): a missing install must fail here.
-    from roomlight.synth.denoise import denoise_panorama
+    from roomlight.datagen.synth.denoise import denoise_panorama
 
     rad, albedo, normal, emitter = _noisy_lamp_panorama()
     rad[:, -2:] = rad[:, :2] = 1.0  # flat content across the longitude seam
@@ -61,11 +61,11 @@ def test_denoised_room_is_closer_to_the_reference_and_keeps_hdr_peaks(mi):
 
     Checks what a denoiser must do: it must lower the error (tone-mapped PSNR)
     and keep the HDR peaks (the sun and sky seen through the window, the brightest 0.1 %)."""
-    from roomlight.io.panorama import exposure_calibrate
-    from roomlight.synth.camera import render_aovs, render_radiance
-    from roomlight.synth.denoise import denoise_panorama
-    from roomlight.synth.rooms import generate_room
-    from roomlight.synth.scene import build_scene
+    from roomlight.core.io.panorama import exposure_calibrate
+    from roomlight.datagen.synth.camera import render_aovs, render_radiance
+    from roomlight.datagen.synth.denoise import denoise_panorama
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.datagen.synth.scene import build_scene
 
     seed = next(s for s in range(60) if generate_room(s).lighting == "sunny")
     room = generate_room(seed)

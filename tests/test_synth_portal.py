@@ -7,8 +7,8 @@ pytestmark = pytest.mark.mitsuba
 
 
 def _portal(mi, sky):
-    from roomlight.synth.portal import portal_emitter
-    from roomlight.synth.spec import Window
+    from roomlight.datagen.synth.portal import portal_emitter
+    from roomlight.datagen.synth.spec import Window
 
     # A 1.2 x 1.0 m window in the wall x = 2 (room side x < 2), reveal 0.25 m.
     w = Window(origin=(2.0, 1.0, -0.6), edge_a=(0.0, 0.0, 1.2), edge_b=(0.0, 1.0, 0.0), normal=(-1.0, 0.0, 0.0),
@@ -17,7 +17,7 @@ def _portal(mi, sky):
 
 
 def _flat_sky(L=100.0, sun=None, sun_dir=(1.0, 0.0, 0.0)):
-    from roomlight.synth.spec import Sky
+    from roomlight.datagen.synth.spec import Sky
 
     return Sky(kind="clear", zenith=(L, L, L), horizon=(L, L, L), exponent=1.0, ground=(L, L, L),
                sun=sun, sun_dir=sun_dir, sun_illuminance=0.0 if sun is None else 8e4)
@@ -36,7 +36,7 @@ def _sample_portal(mi, emitter, p, n=1 << 18, seed=0):
 
 
 def _window_solid_angle(p, w, k=400):
-    from roomlight.synth.portal import portal_quad
+    from roomlight.datagen.synth.portal import portal_quad
 
     o, a, b = portal_quad(w)
     s = (np.arange(k) + 0.5) / k
@@ -61,7 +61,7 @@ def test_portal_sampling_matches_the_window_solid_angle(mi):
 def test_portal_sun_strategy_gives_the_sun_illuminance(mi):
     """Only the sun shines (sky 0): E[weight] = L_sun * sun solid angle when the sun's cone
     passes through the window."""
-    from roomlight.synth.sky import sun_solid_angle
+    from roomlight.datagen.synth.sky import sun_solid_angle
 
     L_sun = 1e8
     sun_dir = tuple(np.array([1.0, 0.3, 0.0]) / np.hypot(1.0, 0.3))
@@ -73,7 +73,7 @@ def test_portal_sun_strategy_gives_the_sun_illuminance(mi):
 def test_sky_model_is_the_same_in_numpy_and_in_the_portal(mi):
     import drjit as dr
 
-    from roomlight.synth.sky import sample_sky, sky_radiance
+    from roomlight.datagen.synth.sky import sample_sky, sky_radiance
 
     rng = np.random.default_rng(5)
     sky = None

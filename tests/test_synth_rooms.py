@@ -7,7 +7,7 @@ pytestmark = pytest.mark.mitsuba
 
 
 def test_capture_point_is_at_eye_height_and_clear_of_surfaces():
-    from roomlight.synth.rooms import capture_clearance, generate_room
+    from roomlight.datagen.synth.rooms import capture_clearance, generate_room
 
     for seed in range(40):
         room = generate_room(seed)
@@ -23,8 +23,8 @@ def test_capture_point_is_at_eye_height_and_clear_of_surfaces():
 def test_generator_covers_large_spaces_and_light_colours():
     """Large spaces (halls, warehouses: >= 9 m sides, 3.5-8 m ceilings) make up ~15 % of rooms,
     and artificial light colours spread over 2700-6500 K rather than a few fixed values."""
-    from roomlight.synth.color import light_rgb
-    from roomlight.synth.rooms import generate_room
+    from roomlight.datagen.synth.color import light_rgb
+    from roomlight.datagen.synth.rooms import generate_room
 
     rooms = [generate_room(seed) for seed in range(200)]
     large = [r for r in rooms if r.shell == "large"]
@@ -52,7 +52,7 @@ def test_every_generated_room_has_a_lit_source_and_a_clear_capture_point():
     ceiling light in the main room, capture >= 0.4 m from every surface, distinct rooms."""
     import json
 
-    from roomlight.synth.rooms import capture_clearance, generate_room
+    from roomlight.datagen.synth.rooms import capture_clearance, generate_room
 
     seen = set()
     for seed in range(150):
@@ -68,8 +68,8 @@ def test_every_generated_room_has_a_lit_source_and_a_clear_capture_point():
 def test_room_description_round_trips_through_json():
     import json
 
-    from roomlight.synth.rooms import generate_room
-    from roomlight.synth.spec import Room
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.datagen.synth.spec import Room
 
     room = generate_room(3)
     d = json.loads(json.dumps(room.to_dict(full=True)))
@@ -77,7 +77,7 @@ def test_room_description_round_trips_through_json():
 
 
 def test_mesh_primitives_are_closed_and_face_outwards():
-    from roomlight.synth.mesh import MeshBuilder
+    from roomlight.datagen.synth.mesh import MeshBuilder
 
     def volume(b):
         m = b.build()

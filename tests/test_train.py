@@ -1,4 +1,4 @@
-"""Tests of roomlight.train: over-fitting, exact resumption, determinism, bad data, refusal of
+"""Tests of roomlight.prior.train: over-fitting, exact resumption, determinism, bad data, refusal of
 incompatible resumes, non-finite losses, atomic checkpoints, schedule and config."""
 
 from __future__ import annotations
@@ -12,14 +12,14 @@ import pytest
 import torch
 from click.testing import CliRunner
 
-from roomlight.data import write_toy_dataset
+from roomlight.prior.data import write_toy_dataset
 from roomlight.errors import RoomlightError
-from roomlight.eval.metrics import psnr, to_ldr
-from roomlight.model import PanoVAE
-from roomlight.model.families import ALL_PRESETS
-from roomlight.train import (TRAIN_PRESETS, Trainer, TrainConfig, TrainingError, config_differences,
+from roomlight.prior.eval.metrics import psnr, to_ldr
+from roomlight.prior.model import PanoVAE
+from roomlight.prior.model.families import ALL_PRESETS
+from roomlight.prior.train import (TRAIN_PRESETS, Trainer, TrainConfig, TrainingError, config_differences,
                              get_train_preset, latest_checkpoint, learning_rate, resolve_run_model)
-from roomlight.train.checkpoint import optimizer_from_tensors, optimizer_to_tensors
+from roomlight.prior.train.checkpoint import optimizer_from_tensors, optimizer_to_tensors
 
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -233,7 +233,7 @@ def test_config_presets_serialisation_and_differences():
     # Every field carries a doc comment (one line per field in the source).
     import inspect
 
-    import roomlight.train.config as mod
+    import roomlight.prior.train.config as mod
 
     src = inspect.getsource(mod.TrainConfig)
     for f in d.to_dict():

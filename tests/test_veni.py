@@ -10,9 +10,9 @@ import pytest
 import torch
 
 from roomlight.errors import RoomlightError
-from roomlight.model.equivariant import SO2Linear, VNAttention, VNBlock, VNLayerNorm, VNLinear, VNReLU, rotate_planar
-from roomlight.model.normalization import Normalization
-from roomlight.model.veni import VENI_PRESETS, VeniConfig, VeniField, VeniVAE, rotate_latent
+from roomlight.prior.model.equivariant import SO2Linear, VNAttention, VNBlock, VNLayerNorm, VNLinear, VNReLU, rotate_planar
+from roomlight.prior.model.normalization import Normalization
+from roomlight.prior.model.veni import VENI_PRESETS, VeniConfig, VeniField, VeniVAE, rotate_latent
 
 NORM = Normalization(mean=(0.3, 0.3, 0.3, 1.0), std=(0.5, 0.5, 0.5, 0.4))
 
@@ -154,7 +154,7 @@ def test_config_validation_and_latent_size():
 
 
 def test_checkpoint_round_trip_through_the_common_loader(tmp_path):
-    from roomlight.model.runs import load_run_model
+    from roomlight.prior.model.runs import load_run_model
 
     m = model("veni-d-tiny", dtype=torch.float32)
     m.save_pretrained(tmp_path / "m", training_config={"note": "test"})
@@ -181,8 +181,8 @@ def test_checkpoint_round_trip_through_the_common_loader(tmp_path):
 
 # ----------------------------------------------------------------------------- training
 def test_training_resumes_bit_identically(tmp_path):
-    from roomlight.data import write_toy_dataset
-    from roomlight.train import Trainer, get_train_preset
+    from roomlight.prior.data import write_toy_dataset
+    from roomlight.prior.train import Trainer, get_train_preset
 
     write_toy_dataset(tmp_path / "data", 8, 32)
     cfg = get_train_preset("veni-d-tiny").replace(max_steps=6, val_fraction=0.0, progress=False, log_every=1,
@@ -207,9 +207,9 @@ def test_training_resumes_bit_identically(tmp_path):
 def test_a_second_schedule_starts_from_the_first_runs_weights_and_refuses_another_family(tmp_path):
     """``train --config veni-d --init-from RUN``: the second schedule's network is the first run's best,
     tensor for tensor, with its normalisation; a run of our prior cannot seed a VENI run."""
-    from roomlight.data import write_toy_dataset
+    from roomlight.prior.data import write_toy_dataset
     from roomlight.errors import RoomlightError
-    from roomlight.train import Trainer, get_train_preset, resolve_run_model
+    from roomlight.prior.train import Trainer, get_train_preset, resolve_run_model
 
     write_toy_dataset(tmp_path / "data", 8, 32)
     fast = dict(val_fraction=0.25, progress=False, log_every=1, val_every=2, ckpt_every=1000, image_every=0,
@@ -255,8 +255,8 @@ def veni_models(tmp_path_factory):
 @pytest.mark.mitsuba
 def test_veni_methods_fit_their_own_models_at_infinity_and_as_2p5d_light(tiny_scene, veni_models, tmp_path):
     from roomlight.errors import RoomlightError
-    from roomlight.inverse import FitConfig, fit_scene, make_light
-    from roomlight.model import PanoVAE, get_preset
+    from roomlight.fitting.inverse import FitConfig, fit_scene, make_light
+    from roomlight.prior.model import PanoVAE, get_preset
 
     scene, _, _ = tiny_scene
     cfg = FitConfig(iterations=12, spp=4, eval_every=4, veni_model=str(veni_models / "veni-tiny"),
@@ -279,10 +279,10 @@ def test_veni_methods_fit_their_own_models_at_infinity_and_as_2p5d_light(tiny_sc
 
 
 def test_eval_prior_scores_veni_on_radiance_and_veni_d_on_depth_too(tmp_path):
-    from roomlight.data import PanoramaDataset, find_panoramas, write_toy_dataset
+    from roomlight.prior.data import PanoramaDataset, find_panoramas, write_toy_dataset
     from roomlight.errors import RoomlightError
-    from roomlight.eval import evaluate_prior
-    from roomlight.fit import LatentFitConfig
+    from roomlight.prior.eval import evaluate_prior
+    from roomlight.prior.latent_fit import LatentFitConfig
 
     write_toy_dataset(tmp_path / "toy", 3, 32)
     ds = PanoramaDataset(find_panoramas(tmp_path / "toy"), (16, 32), root=tmp_path / "toy", calibrate=True)
@@ -300,7 +300,7 @@ def test_eval_prior_scores_veni_on_radiance_and_veni_d_on_depth_too(tmp_path):
 @pytest.mark.mitsuba
 def test_fit_photo_with_veni_d_places_its_2p5d_light_and_veni_shows_light_at_infinity(veni_models, tmp_path):
     from helpers_photo import bright_wall_room, make_tiny_photo
-    from roomlight.photo import fit_photo, load_photo, photo_config
+    from roomlight.fitting.photo import fit_photo, load_photo, photo_config
 
     rad, depth = bright_wall_room(16)
     make_tiny_photo(tmp_path / "case", rad, depth, key=None)

@@ -22,10 +22,10 @@ from click.testing import CliRunner
 
 from helpers_browser import screenshot
 from roomlight.cli.main import cli
-from roomlight.emitter.export import export_emitter
-from roomlight.examples import example_room
-from roomlight.geometry.equirect import pixel_directions
-from roomlight.io import read_ply
+from roomlight.core.emitter.export import export_emitter
+from roomlight.core.examples import example_room
+from roomlight.core.geometry.equirect import pixel_directions
+from roomlight.core.io import read_ply
 
 pytest.importorskip("roomlight.viewer")
 from roomlight.viewer import three_dir  # noqa: E402

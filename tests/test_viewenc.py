@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 import torch
 
-from roomlight.geometry.lift import lift_resolution, lift_view
-from roomlight.geometry.projection import panorama_to_perspective, perspective_directions
-from roomlight.model.view_encoder import ViewEncoder, view_exposure, view_input
-from roomlight.viewenc.crops import CropSpec, crop_rotation, cut_view, expose, occluder_mask, random_crop_spec
+from roomlight.core.geometry.lift import lift_resolution, lift_view
+from roomlight.core.geometry.projection import panorama_to_perspective, perspective_directions
+from roomlight.prior.model.view_encoder import ViewEncoder, view_exposure, view_input
+from roomlight.prior.viewenc.crops import CropSpec, crop_rotation, cut_view, expose, occluder_mask, random_crop_spec
 
 
 def _smooth_panorama(h=16):
     """(3, h, 2h) radiance and (1, h, 2h) depth that vary smoothly with direction."""
-    from roomlight.geometry.equirect import pixel_directions
+    from roomlight.core.geometry.equirect import pixel_directions
 
     d = pixel_directions(h, 2 * h, dtype=torch.float64)
     rad = torch.stack([1.0 + 0.5 * d[..., 0], 1.2 + 0.4 * d[..., 1], 0.8 + 0.3 * d[..., 2]]).float()
@@ -121,8 +121,8 @@ def test_view_exposure_leaves_out_saturated_cells():
 
 @pytest.fixture(scope="module")
 def tiny_prior():
-    from roomlight.model import Normalization, PanoVAE
-    from roomlight.model.config import get_preset
+    from roomlight.prior.model import Normalization, PanoVAE
+    from roomlight.prior.model.config import get_preset
 
     torch.manual_seed(0)
     return PanoVAE(get_preset("tiny"), Normalization((0.5, 0.5, 0.5, 0.7), (0.6, 0.6, 0.6, 0.5))).eval()
@@ -150,8 +150,8 @@ def test_view_input_divides_by_the_view_exposure_and_zeroes_unseen_cells(tiny_pr
 
 
 def test_saved_view_encoder_is_found_beside_its_prior_and_refused_beside_another(tiny_prior, tmp_path):
-    from roomlight.model import PanoVAE
-    from roomlight.model.weights import file_sha256
+    from roomlight.prior.model import PanoVAE
+    from roomlight.prior.model.weights import file_sha256
 
     tiny_prior.save_pretrained(tmp_path / "prior")
     net = ViewEncoder.from_prior(tiny_prior)
@@ -169,9 +169,9 @@ def test_saved_view_encoder_is_found_beside_its_prior_and_refused_beside_another
 
 
 def test_training_resumes_exactly(tiny_prior, tmp_path):
-    from roomlight.data.toy import write_toy_dataset
-    from roomlight.viewenc.config import ViewTrainConfig
-    from roomlight.viewenc.trainer import ViewEncoderTrainer
+    from roomlight.prior.data.toy import write_toy_dataset
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
 
     write_toy_dataset(tmp_path / "data" / "train", 6, height=16)
     write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
@@ -193,11 +193,11 @@ def test_training_resumes_exactly(tiny_prior, tmp_path):
 
 
 def test_a_photo_is_lifted_without_its_objects_and_with_its_pitch():
-    from roomlight.geometry.equirect import direction_to_uv
-    from roomlight.photo.camera import camera_rotation
-    from roomlight.photo.case import PhotoCase
-    from roomlight.photo.masks import ObjectLabels
-    from roomlight.photo.start import photo_partial_panorama
+    from roomlight.core.geometry.equirect import direction_to_uv
+    from roomlight.fitting.photo.camera import camera_rotation
+    from roomlight.fitting.photo.case import PhotoCase
+    from roomlight.fitting.photo.masks import ObjectLabels
+    from roomlight.fitting.photo.start import photo_partial_panorama
 
     h = 32
     rad, depth = _smooth_panorama(h)
@@ -227,7 +227,7 @@ def test_a_photo_is_lifted_without_its_objects_and_with_its_pitch():
 
 def test_the_start_resolves_auto_and_refuses_view_without_an_encoder(tiny_prior):
     from roomlight.errors import RoomlightError
-    from roomlight.photo.start import resolve_start
+    from roomlight.fitting.photo.start import resolve_start
 
     assert tiny_prior.view_encoder is None
     assert resolve_start("auto", tiny_prior) == "samples" and resolve_start("zero", tiny_prior) == "zero"
@@ -245,12 +245,12 @@ def test_the_start_resolves_auto_and_refuses_view_without_an_encoder(tiny_prior)
 def test_an_encoder_trained_for_a_training_run_is_tied_to_its_best_weights(tiny_prior, tmp_path):
     """``--model RUN`` names a training run; the encoder must record the checksum of the weights it
     was trained for (RUN/best/model.safetensors), so that it loads beside them once bundled."""
-    from roomlight.data.toy import write_toy_dataset
-    from roomlight.model import PanoVAE
-    from roomlight.model.view_encoder import ViewEncoder
-    from roomlight.model.weights import file_sha256
-    from roomlight.viewenc.config import ViewTrainConfig
-    from roomlight.viewenc.trainer import ViewEncoderTrainer
+    from roomlight.prior.data.toy import write_toy_dataset
+    from roomlight.prior.model import PanoVAE
+    from roomlight.prior.model.view_encoder import ViewEncoder
+    from roomlight.prior.model.weights import file_sha256
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
 
     tiny_prior.save_pretrained(tmp_path / "run" / "best")
     write_toy_dataset(tmp_path / "data" / "train", 4, height=16)

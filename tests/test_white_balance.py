@@ -11,14 +11,14 @@ import pytest
 import torch
 
 from helpers_scene import make_tiny_scene
-from roomlight.inverse import FitConfig, fit_scene, make_light
-from roomlight.inverse.lights import PriorLight
+from roomlight.fitting.inverse import FitConfig, fit_scene, make_light
+from roomlight.fitting.inverse.lights import PriorLight
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 def tiny_model():
-    from roomlight.model import ModelConfig, Normalization, PanoVAE
+    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
 
     torch.manual_seed(0)
     norm = Normalization(mean=torch.tensor([0.5, 0.5, 0.5, 1.0]), std=torch.tensor([0.5, 0.5, 0.5, 0.3]))
@@ -74,7 +74,7 @@ def _cast_fit(tmp_path, cast, weight=None):
     The room is decoded by the ``lite`` prior, with which the tolerances below were measured: the gain's
     behaviour does not depend on which prior decodes the room, but the noise of a 60-step fit at 8 spp
     does depend on the room (the bundled prior's room at the same seed leaves a neutral gain at 0.022)."""
-    from roomlight.model.runs import load_run_model
+    from roomlight.prior.model.runs import load_run_model
 
     model = load_run_model("lite", device="cpu")
     z0 = torch.randn(model.config.latent_dim, generator=torch.Generator().manual_seed(5)) * 0.5

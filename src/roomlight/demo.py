@@ -2,7 +2,7 @@
 
 Nothing is downloaded. Steps (each reported with a progress line):
 
-1. three rooms: procedural rooms rendered with Mitsuba (:mod:`roomlight.synth`), their seeds fixed
+1. three rooms: procedural rooms rendered with Mitsuba (:mod:`roomlight.datagen.synth`), their seeds fixed
    in :data:`DEMO_ROOMS` before any result was seen and outside every seed the bundled prior was
    trained or validated on (when the generator is unavailable: the built-in example room, once);
 2. the parallax figure: the first room as a 2.5D area light and as an env map, the same probes under both;
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import click
 
-from roomlight.config import StrictConfig
+from roomlight.core.config import StrictConfig
 
 __all__ = ["DemoConfig", "DEMO_ROOMS", "run_demo", "bundled_prior_path", "rooms_table"]
 
@@ -55,7 +55,7 @@ class DemoConfig(StrictConfig):
 
 def bundled_prior_path() -> Path | None:
     """The prior checkpoint shipped inside the package, if any."""
-    from roomlight.model.bundled import bundled_model_path
+    from roomlight.prior.model.bundled import bundled_model_path
 
     return bundled_model_path("prior")
 
@@ -64,11 +64,11 @@ def _room(cfg: DemoConfig, seed: int):
     """(radiance (H, W, 3), depth (H, W), description) of one demo room, or None when the procedural
     generator is unavailable (then the demo uses the built-in example room, once)."""
     try:
-        from roomlight.synth.dataset import render_room  # the procedural room generator
+        from roomlight.datagen.synth.dataset import render_room  # the procedural room generator
     except ImportError:
         render_room = None
     if render_room is not None:
-        from roomlight.synth.denoise import denoise_available
+        from roomlight.datagen.synth.denoise import denoise_available
 
         # The same settings as `roomlight synth`'s default: 64 spp, denoised when OIDN is installed.
         rad, depth, meta = render_room(seed, height=cfg.height, spp=64, denoise=denoise_available())
@@ -84,13 +84,13 @@ def run_demo(cfg: DemoConfig) -> dict:
     """Run every step; returns the summary also written to ``summary.json``."""
     import torch
 
-    from roomlight.bench.builder import BenchConfig, make_benchmark
-    from roomlight.bench.report import collect_results, write_report
-    from roomlight.bench.runner import run_benchmark
+    from roomlight.evaluation.bench.builder import BenchConfig, make_benchmark
+    from roomlight.evaluation.bench.report import collect_results, write_report
+    from roomlight.evaluation.bench.runner import run_benchmark
     from roomlight.errors import RoomlightError
-    from roomlight.inverse import fit_config
-    from roomlight.io import write_panorama
-    from roomlight.render.variant import ensure_variant
+    from roomlight.fitting.inverse import fit_config
+    from roomlight.core.io import write_panorama
+    from roomlight.core.render.variant import ensure_variant
 
     if not cfg.rooms:
         raise RoomlightError("demo: no rooms to fit")
@@ -106,7 +106,7 @@ def run_demo(cfg: DemoConfig) -> dict:
     for seed, material in cfg.rooms:
         room = _room(cfg, seed)
         if room is None:  # no generator: the built-in example room, in the first room's material
-            from roomlight.examples import example_room
+            from roomlight.core.examples import example_room
 
             rad, depth = example_room(cfg.height)
             room, rooms, materials = (rad, depth, "built-in example room"), [], []
@@ -137,7 +137,7 @@ def run_demo(cfg: DemoConfig) -> dict:
     model = None
     prior = bundled_prior_path()
     if prior is not None:
-        from roomlight.model import PanoVAE
+        from roomlight.prior.model import PanoVAE
 
         model = PanoVAE.from_pretrained(prior)
         methods = ["prior", "direct-envmap"]

@@ -25,11 +25,11 @@ def parallax_figure(out_dir, rad, depth, res: tuple[int, int] = (192, 192), spp:
     """
     import numpy as np
 
-    from roomlight.emitter.export import export_emitter
-    from roomlight.io import save_png, write_exr
-    from roomlight.io.preview import auto_exposure_stops, tonemap_gamma
-    from roomlight.render.bundle import parse_probe, render_bundle
-    from roomlight.render.camera import perspective_sensor
+    from roomlight.core.emitter.export import export_emitter
+    from roomlight.core.io import save_png, write_exr
+    from roomlight.core.io.preview import auto_exposure_stops, tonemap_gamma
+    from roomlight.core.render.bundle import parse_probe, render_bundle
+    from roomlight.core.render.camera import perspective_sensor
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -63,7 +63,7 @@ def _comparison_png(path, rad, depth, renders, stops: float):
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from roomlight.io.preview import auto_exposure_stops, colorize_depth, tonemap_gamma
+    from roomlight.core.io.preview import auto_exposure_stops, colorize_depth, tonemap_gamma
 
     fig = plt.figure(figsize=(12, 7.2), dpi=110)
     grid = fig.add_gridspec(2, 3, height_ratios=[1, 1.6])

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import click
 
-from roomlight.bench.builder import BenchConfig
-from roomlight.bench.runner import DEFAULT_EVAL_SPP
+from roomlight.evaluation.bench.builder import BenchConfig
+from roomlight.evaluation.bench.runner import DEFAULT_EVAL_SPP
 from roomlight.cli.common import RESOLUTION, RoomlightGroup, default_of, echo_run_summary, load_prior, parse_sets
-from roomlight.inverse.config import FIT_PRESETS
+from roomlight.fitting.inverse.config import FIT_PRESETS
 
 #: ``--paper`` settings of ``bench make`` (supplementary "Synthetic scene design").
 PAPER_MAKE = {"emitter_height": 512, "width": 1000, "height": 1000, "spp": 4096}
@@ -71,7 +71,7 @@ def make(panos, out_dir, n, seed, paper, emitter_height, res, spp, fov, material
     8-bit renders of the input and evaluation views, and masks; and OUT/manifest.json. An
     interrupted build resumes where it stopped.
     """
-    from roomlight.bench.builder import make_benchmark
+    from roomlight.evaluation.bench.builder import make_benchmark
 
     cfg = BenchConfig(n=n, seed=seed)
     if paper:
@@ -115,14 +115,14 @@ def run(bench, out_dir, methods, model, preset, iterations, fit_spp, sets, eval_
     Each case writes OUT/cases/<panorama>/<material>/<method>/result.json; finished cases are
     skipped, so re-running resumes. Failed cases are reported and retried on the next run.
     """
-    from roomlight.bench.runner import parse_shard, run_benchmark
-    from roomlight.inverse import fit_config
+    from roomlight.evaluation.bench.runner import parse_shard, run_benchmark
+    from roomlight.fitting.inverse import fit_config
 
     cfg = fit_config(preset, iterations=iterations, spp=fit_spp, **parse_sets(sets))
     method_list = _csv(methods)
-    from roomlight.bench.runner import default_methods
-    from roomlight.methods import needs_prior
-    from roomlight.methods import method as method_record
+    from roomlight.evaluation.bench.runner import default_methods
+    from roomlight.fitting.methods import needs_prior
+    from roomlight.fitting.methods import method as method_record
 
     # the VENI methods load their own models (--set veni_model=..., veni_d_model=...)
     with_prior = [m for m in (method_list or default_methods())
@@ -149,7 +149,7 @@ def report(results, out_dir, no_figures, reference, quiet):
     """Table 2 (method x material x metric, mean ± std) of RESULTS as Markdown, CSV and JSON,
     paired per-scene differences of --reference against every other method with bootstrap
     intervals, a figure per scene, and index.html."""
-    from roomlight.bench.report import write_report
+    from roomlight.evaluation.bench.report import write_report
 
     paths = write_report(results, out_dir, figures=not no_figures, progress=not quiet, reference=reference)
     click.echo(paths["markdown"].read_text())

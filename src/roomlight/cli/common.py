@@ -169,8 +169,8 @@ def load_prior(model, needed_by: str):
             fail(f"{needed_by} needs --model (a trained prior); this installation has no bundled prior")
         click.echo(f"note: {needed_by} without --model: using the bundled prior ({model}), a small CPU-trained one; "
                    "pass --model RUN for your own", err=True)
-    from roomlight.model.runs import load_run_model
-    from roomlight.render.variant import torch_device
+    from roomlight.prior.model.runs import load_run_model
+    from roomlight.core.render.variant import torch_device
 
     return load_run_model(model, device=torch_device()), str(Path(model).resolve())
 

@@ -17,7 +17,7 @@ def command(run_dir, out_dir):
     """
     import warnings
 
-    from roomlight.model import ThirdPartyCheckpointWarning, convert_authors_checkpoint
+    from roomlight.prior.model import ThirdPartyCheckpointWarning, convert_authors_checkpoint
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ThirdPartyCheckpointWarning)

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from roomlight.cli.common import HEIGHT, RESOLUTION, RoomlightGroup, fail, repair_options
-from roomlight.model.config import PRESETS
+from roomlight.prior.model.config import PRESETS
 
 
 def _resolution(res, preset):
@@ -17,7 +17,7 @@ def _resolution(res, preset):
         if w != 2 * h:
             raise click.BadParameter(f"expected HxW with W = 2H, got {h}x{w}", param_hint="--res")
         return h, w
-    from roomlight.model import get_preset
+    from roomlight.prior.model import get_preset
 
     return get_preset(preset).resolution
 
@@ -44,7 +44,7 @@ def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path, cla
     The statistics are what `roomlight train` computes at its start and stores in the model;
     bad files are listed by name and skipped.
     """
-    from roomlight.data import PanoramaDataset, dataset_statistics, split_files
+    from roomlight.prior.data import PanoramaDataset, dataset_statistics, split_files
 
     h, w = _resolution(res, preset)
     splits = split_files(data_dir)
@@ -78,7 +78,7 @@ def stats(data_dir, res, preset, split, depth_units, no_calibrate, out_path, cla
 @click.option("--workers", type=int, default=2, show_default=True, help="Processes decoding EXRs.")
 def pack(data_dir, res, preset, dtype, depth_units, workers):
     """Build the packed cache `roomlight train` reads (otherwise built on first use)."""
-    from roomlight.data import PackedCache, split_files
+    from roomlight.prior.data import PackedCache, split_files
 
     h, w = _resolution(res, preset)
     files = [f for s in split_files(data_dir).values() for f in s]
@@ -97,7 +97,7 @@ def toy(count, out_dir, height, seed):
 
     Not a substitute for `roomlight synth` rooms: no path tracing, no furniture.
     """
-    from roomlight.data import write_toy_dataset
+    from roomlight.prior.data import write_toy_dataset
 
     paths = write_toy_dataset(out_dir, count, height, seed)
     click.echo(f"wrote {len(paths)} toy panoramas ({height}x{2 * height}) to {out_dir}")

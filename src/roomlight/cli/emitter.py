@@ -12,14 +12,14 @@ def load_panorama_tensors(pano: str, depth: str | None, resolution: int | None, 
     """Read a panorama (or the built-in ``example``) as torch (radiance (H,W,3), depth (H,W)|None, meta)."""
     import torch
 
-    from roomlight.geometry import resize_panorama
+    from roomlight.core.geometry import resize_panorama
 
     if pano == "example":
-        from roomlight.examples import example_room
+        from roomlight.core.examples import example_room
 
         rad, dep = example_room(resolution or 128)
         return rad, dep, {"source": "built-in example room"}
-    from roomlight.io import read_panorama
+    from roomlight.core.io import read_panorama
 
     import warnings
 
@@ -61,8 +61,8 @@ def command(pano, depth_path, kind, out_dir, resolution, clamp_negative, fill_no
       scene.xml     a Mitsuba 3 scene with the emitter (id "emitter"): mi.load_file(...)
       preview.png   tone-mapped radiance above colour-mapped depth
     """
-    from roomlight.emitter.export import export_emitter
-    from roomlight.light import parse_emitter_kind
+    from roomlight.core.emitter.export import export_emitter
+    from roomlight.core.light import parse_emitter_kind
 
     k = parse_emitter_kind(kind)
     rad, dep, meta = load_panorama_tensors(pano, depth_path, resolution, clamp_negative, fill_nonfinite)

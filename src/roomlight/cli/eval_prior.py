@@ -53,11 +53,11 @@ def command(model_path, data_dir, split, fit_steps, fit_init, depth_weight, peak
     locally), PSNR on HDR, AbsRel on depth. Prints a Markdown table and writes it with a JSON
     file holding per-image values.
     """
-    from roomlight.data import PanoramaDataset, split_files
-    from roomlight.data.splits import find_panoramas, has_split_folders
-    from roomlight.eval.prior import evaluate_prior, report_markdown, write_report
-    from roomlight.fit import LatentFitConfig
-    from roomlight.model.runs import load_run_model, resolve_run_model
+    from roomlight.prior.data import PanoramaDataset, split_files
+    from roomlight.prior.data.splits import find_panoramas, has_split_folders
+    from roomlight.prior.eval.prior import evaluate_prior, report_markdown, write_report
+    from roomlight.prior.latent_fit import LatentFitConfig
+    from roomlight.prior.model.runs import load_run_model, resolve_run_model
 
     model = load_run_model(model_path)
     if split == "auto":
@@ -80,7 +80,7 @@ def command(model_path, data_dir, split, fit_steps, fit_init, depth_weight, peak
         raise click.UsageError("--pixel-smoothness sets the weight of the --pixel-level rows: add --pixel-level")
     if pixel_level and fit is None:
         raise click.UsageError("--pixel-level uses the latent fit's settings: give --fit-steps > 0")
-    from roomlight.fit.pixel import DEFAULT_SMOOTHNESS
+    from roomlight.prior.latent_fit.pixel import DEFAULT_SMOOTHNESS
 
     smooth = (DEFAULT_SMOOTHNESS if pixel_smoothness is None else pixel_smoothness) if pixel_level else None
     report = evaluate_prior(model, ds, fit, batch_size=batch_size, depth_only_fit=depth_only,

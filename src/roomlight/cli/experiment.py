@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from roomlight.cli.common import RoomlightGroup, default_of, fail, parse_sets
-from roomlight.experiments.capacity import CapacityConfig as _Cap
+from roomlight.evaluation.experiments.capacity import CapacityConfig as _Cap
 
 
 def _sets(what: str, example: str):
@@ -64,7 +64,7 @@ def capacity(out_dir, rooms, seed, pano_height, pano_spp, image_size, spp, mater
     bootstrap intervals, the ratio environment map / 2.5D light and a verdict on the paper's
     2-5x), OUT/capacity.json and OUT/figures/*.png. Finished rooms are skipped on a rerun.
     """
-    from roomlight.experiments.capacity import CapacityConfig, run_capacity
+    from roomlight.evaluation.experiments.capacity import CapacityConfig, run_capacity
 
     changes = {k: v for k, v in dict(rooms=rooms, seed=seed, pano_height=pano_height, pano_spp=pano_spp,
                                      image_size=image_size, gt_spp=spp, emitter_spp=spp,
@@ -73,8 +73,8 @@ def capacity(out_dir, rooms, seed, pano_height, pano_spp, image_size, spp, mater
     cfg = CapacityConfig().override(**changes)
     room_list = None
     if wall_light_room:
-        from roomlight.experiments.layout import Caster, wall_light_layout, wall_light_room as make
-        from roomlight.synth.scene import build_scene
+        from roomlight.evaluation.experiments.layout import Caster, wall_light_layout, wall_light_room as make
+        from roomlight.datagen.synth.scene import build_scene
 
         room = make()
         layout = wall_light_layout(room, Caster(build_scene(room)), cfg.layout_config())
@@ -107,7 +107,7 @@ def ablate(out_dir, study, data_dir, steps, rows, seed, sets, quiet):
     Every stage is resumable: a finished training run or evaluation is skipped on a rerun, an
     interrupted training continues from its last checkpoint.
     """
-    from roomlight.experiments.ablation import ABLATION_PRESETS, run_ablation
+    from roomlight.evaluation.experiments.ablation import ABLATION_PRESETS, run_ablation
 
     changes = {k: v for k, v in dict(steps=steps, rows=_csv(rows), seed=seed).items() if v is not None}
     changes.update(parse_sets(sets))
@@ -135,7 +135,7 @@ def cost(out_dir, quick, paper, model_preset, device, methods, sets):
     """The cost table on this machine: parameters, training throughput (and the paper's schedule
     in hours at that rate), decode time at the model's resolution, fit time per case for each
     method, with the device named."""
-    from roomlight.experiments.cost import COST_PRESETS, run_cost
+    from roomlight.evaluation.experiments.cost import COST_PRESETS, run_cost
 
     if quick and paper:
         fail("--quick and --paper exclude each other")

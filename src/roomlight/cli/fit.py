@@ -5,9 +5,9 @@ from __future__ import annotations
 import click
 
 from roomlight.cli.common import default_of, load_prior, parse_sets
-from roomlight.inverse.config import FIT_PRESETS, FitConfig
-from roomlight.inverse.methods import METHODS
-from roomlight.methods import method as method_record
+from roomlight.fitting.inverse.config import FIT_PRESETS, FitConfig
+from roomlight.fitting.inverse.methods import METHODS
+from roomlight.fitting.methods import method as method_record
 
 _FAST = FIT_PRESETS["fast"]
 
@@ -53,9 +53,9 @@ def command(scene, method, out_dir, model, preset, sets, quiet, **overrides):
     """
     from pathlib import Path
 
-    from roomlight.inverse import fit_config, fit_scene
-    from roomlight.inverse.outputs import recorded_light_note
-    from roomlight.scene import load_scene
+    from roomlight.fitting.inverse import fit_config, fit_scene
+    from roomlight.fitting.inverse.outputs import recorded_light_note
+    from roomlight.fitting.scene import load_scene
 
     spec = load_scene(scene)
     cfg = fit_config(preset, **{**overrides, **parse_sets(sets)})

@@ -47,15 +47,15 @@ def command(model_path, pano, depth_path, target, steps, lr, lr_final, init, dep
       comparison.png   target above fit (tone-mapped radiance | depth)
       emitter/         the fit as a 2.5D area light (PLY + EXR + Mitsuba XML), unless --no-emitter
     """
-    from roomlight.progress import progress_bar
+    from roomlight.core.progress import progress_bar
 
-    from roomlight.data.dataset import load_training_pair
-    from roomlight.emitter.export import export_emitter
-    from roomlight.eval.prior import panorama_metrics
-    from roomlight.fit import LatentFitConfig, fit_latent
-    from roomlight.io import save_png, write_panorama
-    from roomlight.model.runs import load_run_model
-    from roomlight.eval.panels import training_panel
+    from roomlight.prior.data.dataset import load_training_pair
+    from roomlight.core.emitter.export import export_emitter
+    from roomlight.prior.eval.prior import panorama_metrics
+    from roomlight.prior.latent_fit import LatentFitConfig, fit_latent
+    from roomlight.core.io import save_png, write_panorama
+    from roomlight.prior.model.runs import load_run_model
+    from roomlight.prior.eval.panels import training_panel
 
     model = load_run_model(model_path)
     device = next(model.parameters()).device

@@ -5,9 +5,9 @@ from __future__ import annotations
 import click
 
 from roomlight.cli.common import FINITE, default_of, load_prior, parse_sets
-from roomlight.methods import method as method_record
-from roomlight.photo.config import PHOTO_PRESETS, PhotoFitConfig
-from roomlight.photo.fitter import PHOTO_METHODS
+from roomlight.fitting.methods import method as method_record
+from roomlight.fitting.photo.config import PHOTO_PRESETS, PhotoFitConfig
+from roomlight.fitting.photo.fitter import PHOTO_METHODS
 
 _FAST = PHOTO_PRESETS["fast"]
 _BALANCED = PHOTO_PRESETS["balanced"]
@@ -81,9 +81,9 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
       result.json         objective, materials, settings, timings (+ history.jsonl, loss.png)
     An interrupted fit resumes from its saved state when the command is run again.
     """
-    from roomlight.photo.case import load_photo
-    from roomlight.photo.config import photo_config
-    from roomlight.photo.pipeline import run_photo
+    from roomlight.fitting.photo.case import load_photo
+    from roomlight.fitting.photo.config import photo_config
+    from roomlight.fitting.photo.pipeline import run_photo
 
     cfg = photo_config(preset, iterations=iterations, spp=spp, seed=seed, init=init, **parse_sets(sets))
     case = load_photo(image, depth=depth, depth_kind=depth_kind, mask=mask, normals=normals, fov=fov,
@@ -95,7 +95,7 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     if any(method_record(m).takes_model_option(model is not None) for m in (method, *compare)):
         prior, _ = load_prior(model, f"--method {method}")
         if view_encoder is not None:
-            from roomlight.model.view_encoder import ViewEncoder
+            from roomlight.prior.model.view_encoder import ViewEncoder
 
             prior.set_view_encoder(ViewEncoder.from_pretrained(view_encoder, prior.config))
     click.echo(f"{case.files['image']}: {case.width}x{case.height}, {len(case.objects.ids)} object(s), "

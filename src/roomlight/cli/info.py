@@ -19,7 +19,7 @@ def command():
 
     from roomlight import __version__
     from roomlight.errors import BackendError
-    from roomlight.render.variant import choose_variant, cuda_available, llvm_status
+    from roomlight.core.render.variant import choose_variant, cuda_available, llvm_status
 
     rows = [("roomlight", __version__), ("python", platform.python_version()),
             ("numpy", numpy.__version__), ("torch", torch.__version__)]

@@ -64,7 +64,7 @@ def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, ou
       roomlight insert out/photo --placements objects.yaml --light direct-envmap --out out/env/composite.png
     """
     from roomlight.errors import RoomlightError
-    from roomlight.insert import InsertSpec, insert_objects, load_fitted_photo, read_placements, write_insert_outputs
+    from roomlight.fitting.insert import InsertSpec, insert_objects, load_fitted_photo, read_placements, write_insert_outputs
 
     specs = list(read_placements(placements)) if placements else []
     if obj is not None or at is not None or at_xyz is not None:

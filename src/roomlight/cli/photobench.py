@@ -5,8 +5,8 @@ from __future__ import annotations
 import click
 
 from roomlight.cli.common import FINITE, RESOLUTION, default_of, echo_run_summary, load_prior, parse_sets, sets_option
-from roomlight.photobench.config import PhotoBenchConfig
-from roomlight.photobench.runner import DEFAULT_EVAL_SPP, DEFAULT_METHODS, KNOWN_METHODS
+from roomlight.evaluation.photobench.config import PhotoBenchConfig
+from roomlight.evaluation.photobench.runner import DEFAULT_EVAL_SPP, DEFAULT_METHODS, KNOWN_METHODS
 
 __all__ = ["make_photos", "run_photos", "report_photos"]
 
@@ -19,7 +19,7 @@ def _csv(value):
 
 
 def _shard(text):
-    from roomlight.evaluate.runner import parse_shard
+    from roomlight.evaluation.harness.runner import parse_shard
 
     return parse_shard(text)
 
@@ -63,7 +63,7 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, inserts, dep
     the exact depth and an oracle light. Finished photos are skipped; photos built with other
     --depth-noise/--depth-scale only get a new depth.exr. OUT/manifest.json lists the photos.
     """
-    from roomlight.photobench.builder import make_photo_benchmark
+    from roomlight.evaluation.photobench.builder import make_photo_benchmark
 
     cfg = PhotoBenchConfig(n=n, seed=seed)
     height, width = res if res else (None, None)
@@ -109,11 +109,11 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, schedule
     material errors); finished cases are skipped, so re-running resumes. Failed cases are
     reported and retried on the next run.
     """
-    from roomlight.photobench.runner import run_photo_benchmark
+    from roomlight.evaluation.photobench.runner import run_photo_benchmark
 
     from roomlight.errors import RoomlightError
-    from roomlight.methods import check_methods
-    from roomlight.methods import method as method_record
+    from roomlight.fitting.methods import check_methods
+    from roomlight.fitting.methods import method as method_record
 
     try:
         method_list = check_methods(_csv(methods) or DEFAULT_METHODS, KNOWN_METHODS)
@@ -141,7 +141,7 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, schedule
 def report_photos(results, out_dir, no_figures, reference, quiet):
     """The photo benchmark's tables (probes: method x material x metric; recovered materials), paired
     statistics, a figure per photo and index.html, from the RESULTS of run-photos."""
-    from roomlight.photobench.report import write_photo_report
+    from roomlight.evaluation.photobench.report import write_photo_report
 
     paths = write_photo_report(results, out_dir, figures=not no_figures, progress=not quiet, reference=reference)
     click.echo(paths["markdown"].read_text())

@@ -81,7 +81,7 @@ def command(input_dir, out_dir, nadir, inpainter, depth, truth_dir, camera_heigh
     OUT/prepare-log.jsonl (what was done to each file), OUT/stats.json, OUT/contact_sheet.png
     and OUT/previews/.
     """
-    from roomlight.prepare.dataset import PrepareConfig, prepare_folder
+    from roomlight.datagen.prepare.dataset import PrepareConfig, prepare_folder
 
     if res is not None and res[1] != 2 * res[0]:
         raise click.BadParameter(f"panoramas are H x 2H, got {res[0]}x{res[1]}", param_hint="--res")
@@ -97,7 +97,7 @@ def command(input_dir, out_dir, nadir, inpainter, depth, truth_dir, camera_heigh
     if outputs and not no_summary:
         from pathlib import Path
 
-        from roomlight.synth.dataset import contact_sheet, write_stats
+        from roomlight.datagen.synth.dataset import contact_sheet, write_stats
 
         files = [Path(out_dir) / o for o in outputs]
         stats = write_stats(out_dir, files=files)

@@ -33,10 +33,10 @@ def command(scene, out_dir, origin, target, up, fov, res, spp, seed, max_depth, 
     \b
       roomlight render out/room --sphere -0.8,-0.5,-2,0.3 --sphere 0.8,-0.5,-1.2,0.3 --out out/r
     """
-    from roomlight.io import save_png, write_exr
-    from roomlight.io.preview import tonemap_gamma
-    from roomlight.render.bundle import parse_probe, render_bundle
-    from roomlight.render.camera import perspective_sensor
+    from roomlight.core.io import save_png, write_exr
+    from roomlight.core.io.preview import tonemap_gamma
+    from roomlight.core.render.bundle import parse_probe, render_bundle
+    from roomlight.core.render.camera import perspective_sensor
 
     probes = [parse_probe(s) for s in spheres]
     if spp <= 0:

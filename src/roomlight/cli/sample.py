@@ -14,8 +14,8 @@ def _encode_file(model, path, fit_steps: int, sets: dict, repairs: dict):
     """Latent (D,) of a panorama file: the encoder's mean, refined by a latent fit if fit_steps > 0."""
     import torch
 
-    from roomlight.data.dataset import load_training_pair
-    from roomlight.fit import LatentFitConfig, fit_latent
+    from roomlight.prior.data.dataset import load_training_pair
+    from roomlight.prior.latent_fit import LatentFitConfig, fit_latent
 
     device = next(model.parameters()).device
     rad, dep, info = load_training_pair(path, model.config.resolution, calibrate=True,
@@ -65,17 +65,17 @@ def command(model_path, out_dir, count, seed, temperature, interpolate, mode, fi
       latents.json         the latents and settings
     With --interpolate A B: interp_000.exr ... and interpolation.png instead.
     """
-    from roomlight.emitter.export import export_emitter
-    from roomlight.eval.figures import interpolation_strip, samples_figure
-    from roomlight.eval.metrics import peak_contrast
-    from roomlight.eval.samples import (decode_latents, interpolate_latents, probe_layout, render_probes,
+    from roomlight.core.emitter.export import export_emitter
+    from roomlight.prior.eval.figures import interpolation_strip, samples_figure
+    from roomlight.prior.eval.metrics import peak_contrast
+    from roomlight.prior.eval.samples import (decode_latents, interpolate_latents, probe_layout, render_probes,
                                         sample_latents)
-    from roomlight.io import write_exr, write_panorama
-    from roomlight.model.runs import load_run_model
+    from roomlight.core.io import write_exr, write_panorama
+    from roomlight.prior.model.runs import load_run_model
 
     sets = parse_sets(sets)
     repairs = {"clamp_negative": clamp_negative, "fill_nonfinite": fill_nonfinite}
-    from roomlight.fit import LatentFitConfig
+    from roomlight.prior.latent_fit import LatentFitConfig
 
     LatentFitConfig().override(**sets)  # refuse a bad --set before any work
     model = load_run_model(model_path)

@@ -51,14 +51,14 @@ def command(n, out_dir, res, spp, seed0, shard, workers, scheduler, nadir_cap, d
     Samples go to OUT/train, OUT/val and OUT/test by seed range (80/10/10 %). Re-running the
     same command skips finished samples. Also writes OUT/stats.json and OUT/contact_sheet.png.
     """
-    from roomlight.synth.dataset import (
+    from roomlight.datagen.synth.dataset import (
         SynthConfig,
         contact_sheet,
         generate_dataset,
         write_stats,
     )
 
-    from roomlight.synth.denoise import denoise_available
+    from roomlight.datagen.synth.denoise import denoise_available
 
     h, w = res
     if denoise is None:

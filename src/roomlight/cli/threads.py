@@ -29,7 +29,7 @@ from roomlight.errors import RoomlightError
 __all__ = ["ENV_THREADS", "available_cpus", "prepare_environment", "thread_count", "apply_thread_policy",
            "default_threads", "busy_cpus", "measured_threads"]
 
-from roomlight.cpu import ENV_THREADS, ENV_THREADS_AUTO, available_cpus, busy_cpus, measured_threads  # noqa: F401
+from roomlight.core.cpu import ENV_THREADS, ENV_THREADS_AUTO, available_cpus, busy_cpus, measured_threads  # noqa: F401
 
 
 #: Other processes keeping at least this many CPUs busy make OpenMP's threads sleep when idle.
@@ -68,7 +68,7 @@ def apply_thread_policy(option: int | None = None) -> int | None:
     when neither is given (then nothing changes).
 
     The count is exported as ``$ROOMLIGHT_THREADS`` and ``$OMP_NUM_THREADS`` so that worker
-    processes and the Mitsuba setup (:func:`roomlight.render.variant.ensure_variant`) use the
+    processes and the Mitsuba setup (:func:`roomlight.core.render.variant.ensure_variant`) use the
     same number. The ``roomlight`` program sets ``$ROOMLIGHT_THREADS`` to :func:`available_cpus`
     when it starts (see :func:`default_threads`), so a command always runs under the policy; code
     that calls the command group in-process keeps its own settings unless it asks.
@@ -91,7 +91,7 @@ def apply_thread_policy(option: int | None = None) -> int | None:
 def default_threads() -> None:
     """``$ROOMLIGHT_THREADS`` defaults to :func:`measured_threads` (the program's start); it is then
     marked as measured (``$ROOMLIGHT_THREADS_AUTO=1``), so that long commands measure again between
-    their phases (:func:`roomlight.render.variant.recheck_threads`). A count the user gives stays fixed."""
+    their phases (:func:`roomlight.core.render.variant.recheck_threads`). A count the user gives stays fixed."""
     if not os.environ.get(ENV_THREADS, "").strip():
         os.environ[ENV_THREADS] = str(measured_threads())
         os.environ[ENV_THREADS_AUTO] = "1"

@@ -7,7 +7,7 @@ import json
 import click
 
 from roomlight.cli.common import parse_sets, repair_options
-from roomlight.train.config import TRAIN_PRESETS
+from roomlight.prior.train.config import TRAIN_PRESETS
 
 
 @click.command("train")
@@ -48,7 +48,7 @@ def command(data_dir, run_dir, preset, batch_size, epochs, max_steps, lr, seed, 
     \b
       torchrun --nproc-per-node=4 -m roomlight.cli.main train --data D --out RUN
     """
-    from roomlight.train import Trainer, get_train_preset
+    from roomlight.prior.train import Trainer, get_train_preset
 
     overrides = {k: v for k, v in dict(batch_size=batch_size, epochs=epochs, max_steps=max_steps, lr=lr, seed=seed,
                                        num_workers=num_workers).items() if v is not None}

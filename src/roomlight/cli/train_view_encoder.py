@@ -41,8 +41,8 @@ def command(data_dir, run_dir, model, max_steps, batch_size, lr, seed, limit, ti
     result is RUN/best; copy it into the prior's folder as view_encoder/ (or pass
     --view-encoder RUN/best to fit-photo) so that `fit-photo --init view` uses it.
     """
-    from roomlight.viewenc.config import ViewTrainConfig
-    from roomlight.viewenc.trainer import ViewEncoderTrainer
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
 
     overrides = {k: v for k, v in dict(max_steps=max_steps, batch_size=batch_size, lr=lr, seed=seed).items()
                  if v is not None}

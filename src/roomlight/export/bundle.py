@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import InputFileError
-from roomlight.light import Light
+from roomlight.core.light import Light
 
 __all__ = ["SceneObject", "LightSource", "load_light"]
 
@@ -48,7 +48,7 @@ class SceneObject:
 class LightSource:
     """A 2.5D area light ready to be shown or exported.
 
-    ``light`` is the panorama (a ``mesh`` :class:`~roomlight.light.Light`: linear radiance, radial
+    ``light`` is the panorama (a ``mesh`` :class:`~roomlight.core.light.Light`: linear radiance, radial
     metres; its capture point is the origin); ``vertices`` (N, 3), ``faces`` (F, 3) and ``uv`` (N, 2)
     the emissive mesh, with v = 0 at the texture's top row, as in the bundle's PLY.
     """
@@ -76,7 +76,7 @@ class LightSource:
 
 
 def _mesh_from_panorama(light: Light):
-    from roomlight.emitter.area_light import build_area_light
+    from roomlight.core.emitter.area_light import build_area_light
 
     mesh = build_area_light(light.radiance, light.depth)
     return mesh.vertices.numpy(), mesh.faces.numpy(), mesh.uv.numpy()
@@ -89,7 +89,7 @@ def _rgb(channels: dict, path: Path) -> np.ndarray:
 
 
 def _from_bundle(d: Path) -> LightSource:
-    from roomlight.io import read_depth, read_exr, read_ply
+    from roomlight.core.io import read_depth, read_exr, read_ply
 
     radiance = _rgb(read_exr(d / "radiance.exr"), d / "radiance.exr")
     if not (d / "depth.exr").is_file():
@@ -109,7 +109,7 @@ def _from_bundle(d: Path) -> LightSource:
 
 
 def _scene_objects(scene) -> tuple[list[SceneObject], dict | None]:
-    from roomlight.scene.build import object_geometry
+    from roomlight.fitting.scene.build import object_geometry
 
     roles: dict[str, list[str]] = {}
     for name, view in scene.views.items():
@@ -125,7 +125,7 @@ def _scene_objects(scene) -> tuple[list[SceneObject], dict | None]:
 
 
 def _from_scene(path: Path) -> LightSource:
-    from roomlight.scene.build import load_scene
+    from roomlight.fitting.scene.build import load_scene
 
     scene = load_scene(path, check_files=False)
     if scene.emitter is None:
@@ -172,7 +172,7 @@ def _bundle_dir(p: Path) -> Path | None:
 
 def load_light(path, scene=None) -> LightSource:
     """The 2.5D area light behind ``path`` (see the module docstring), with ``scene``'s objects if given."""
-    from roomlight.scene.build import load_scene
+    from roomlight.fitting.scene.build import load_scene
 
     p = Path(path)
     if not p.exists():
@@ -181,7 +181,7 @@ def load_light(path, scene=None) -> LightSource:
         if p.name in _SCENE_NAMES or p.suffix in (".json", ".yaml", ".yml"):
             light = _from_scene(p)
         else:
-            from roomlight.io import read_panorama
+            from roomlight.core.io import read_panorama
 
             pano = read_panorama(p)
             if pano.depth is None:
@@ -212,8 +212,8 @@ def _is_photo_fit(d: Path) -> bool:
 
 def _add_photo(light: LightSource, folder: Path) -> None:
     """The photograph's camera, depth mesh and pixels, in the light's room frame (a fit-photo folder)."""
-    from roomlight.insert.fitted import load_fitted_photo
-    from roomlight.photo.geometry import build_geometry
+    from roomlight.fitting.insert.fitted import load_fitted_photo
+    from roomlight.fitting.photo.geometry import build_geometry
 
     fitted = load_fitted_photo(folder)
     case, t = fitted.case, fitted.transform

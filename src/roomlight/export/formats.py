@@ -39,7 +39,7 @@ def emission_strength(radiance: np.ndarray) -> float:
 
 
 def _write_textures(light: LightSource, out: Path, png: bool) -> dict[str, Path]:
-    from roomlight.io import save_png, write_exr
+    from roomlight.core.io import save_png, write_exr
 
     paths = {"radiance": out.with_name(f"{out.stem}_radiance.exr")}
     r = light.radiance
@@ -212,7 +212,7 @@ def _camera_optics(camera: dict) -> dict:
 
 def _write_backplate(light: LightSource, out: Path) -> dict[str, Path]:
     """The photograph beside the scene: float EXR (the exact linear pixels) and an sRGB PNG."""
-    from roomlight.io import save_png, write_exr
+    from roomlight.core.io import save_png, write_exr
 
     b = light.backplate
     paths = {"backplate_exr": out.with_name(f"{out.stem}_backplate.exr"),

@@ -17,7 +17,7 @@ from string import Template
 
 import numpy as np
 
-from roomlight.color import DISPLAY_GAMMA
+from roomlight.core.color import DISPLAY_GAMMA
 from roomlight.export.bundle import LightSource
 
 __all__ = ["viewer_payload", "write_viewer"]
@@ -67,7 +67,7 @@ def _photo_payload(light: LightSource) -> dict | None:
 
     from PIL import Image
 
-    from roomlight.color import linear_to_srgb
+    from roomlight.core.color import linear_to_srgb
 
     img = Image.fromarray(np.rint(linear_to_srgb(np.clip(light.backplate, 0, 1)) * 255).astype(np.uint8))
     scale = min(1.0, BACKDROP_SIZE / max(img.size))
@@ -99,7 +99,7 @@ def _photo_probe(light: LightSource) -> tuple[list[float], float]:
 
 def viewer_payload(light: LightSource, cube_size: int = 128) -> dict:
     """The JSON the page reads: the light, the objects, the start camera, probe and exposure."""
-    from roomlight.io.preview import auto_exposure_stops
+    from roomlight.core.io.preview import auto_exposure_stops
 
     rad = np.nan_to_num(light.radiance.astype(np.float32), nan=0.0, posinf=HALF_MAX)
     clipped = int((rad > HALF_MAX).any(-1).sum())

@@ -1,0 +1,2 @@
+"""Making training data: procedural rooms rendered as panoramas, and real captures prepared.
+"""

@@ -1,1 +1,0 @@
-"""Procedural indoor rooms: generator (rooms, furniture, lights, sky), Mitsuba scenes, panorama rendering, dataset driver."""
