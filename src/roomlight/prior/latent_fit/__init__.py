@@ -8,6 +8,6 @@ Not to be confused with :mod:`roomlight.fitting.inverse`, which recovers a scene
 
 from __future__ import annotations
 
-from roomlight.prior.latent_fit.latent import TARGETS, FitConfig, FitResult, LatentFitConfig, LatentFitResult, fit_latent
+from roomlight.prior.latent_fit.latent import TARGETS, LatentFitConfig, LatentFitResult, fit_latent
 
-__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS", "FitConfig", "FitResult"]
+__all__ = ["LatentFitConfig", "LatentFitResult", "fit_latent", "TARGETS"]

@@ -262,8 +262,3 @@ def optimise(params: torch.Tensor, decode, problem: FitProblem, config: LatentFi
         if callback is not None:
             callback(step + 1, float(per.detach().mean()))
     return best_p, best_loss, history
-
-
-#: Former names, kept importable; ``roomlight.fitting.inverse`` has its own ``FitConfig`` / ``FitResult``.
-FitConfig = LatentFitConfig
-FitResult = LatentFitResult
