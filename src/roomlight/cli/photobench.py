@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from roomlight.cli.common import FINITE, RESOLUTION, default_of, echo_run_summary, load_prior, parse_sets, sets_option
-from roomlight.evaluation.photobench.config import PhotoBenchConfig
+from roomlight.evaluation.photobench.config import SUITES, PhotoBenchConfig, suite_config
 from roomlight.evaluation.photobench.runner import DEFAULT_EVAL_SPP, DEFAULT_METHODS, KNOWN_METHODS
 
 __all__ = ["make_photos", "run_photos", "report_photos"]
@@ -26,6 +26,14 @@ def _shard(text):
 
 @click.command("make-photos")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Benchmark folder to write.")
+@click.option("--suite", type=click.Choice(SUITES), default="rooms", show_default=True,
+              help="rooms: the room generator's own rooms, cameras and object colours; wide: photos that differ "
+                   "from them on purpose (rare rooms, repainted walls, lamps of several colour temperatures, "
+                   "table-top to standing cameras, 40-90 degree lenses, black to white and metal objects, and "
+                   "every third photo lit by a real captured HDR panorama; docs/benchmark.md).")
+@click.option("--captured-lights", type=click.Path(file_okay=False), default=None, metavar="DIR",
+              help="HDR panoramas (*.exr) for the wide suite's captured-light photos [default: Blender's CC0 "
+                   "studio lights, installed by `make blender`].")
 @click.option("--n", type=int, default=PhotoBenchConfig.n, show_default=True, help="Photos (indices 0 .. N-1).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Base seed (rooms, staging, materials, renders).")
 @click.option("--res", type=RESOLUTION, default=None,
@@ -53,8 +61,8 @@ def _shard(text):
                    "--set oracle_height=32 --set objects=[2,2] (repeatable).")
 @click.option("--overwrite", is_flag=True, help="Rebuild photos that are already built.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, inserts, depth_noise, depth_scale, shard, sets, overwrite,
-                quiet):
+def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, fov, probes, inserts, depth_noise,
+                depth_scale, shard, sets, overwrite, quiet):
     """Render the photo benchmark: photos of procedural rooms with inserted objects, and their truth.
 
     Each OUT/photo-NNNNN/ is a photo case (image.exr, depth.exr, mask.png, camera.json; what
@@ -65,11 +73,12 @@ def make_photos(out_dir, n, seed, res, spp, probe_spp, fov, probes, inserts, dep
     """
     from roomlight.evaluation.photobench.builder import make_photo_benchmark
 
-    cfg = PhotoBenchConfig(n=n, seed=seed)
+    cfg = suite_config(suite, n=n, seed=seed)
     height, width = res if res else (None, None)
     cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, fov=fov, probes=probes, inserts=inserts,
                        depth_noise=depth_noise, depth_scale=depth_scale, **parse_sets(sets))
-    result = make_photo_benchmark(out_dir, cfg, overwrite=overwrite, shard=_shard(shard), progress=not quiet)
+    result = make_photo_benchmark(out_dir, cfg, overwrite=overwrite, shard=_shard(shard), progress=not quiet,
+                                  captured_lights=captured_lights)
     click.echo(f"make-photos: {len(result['built'])} built, {len(result['updated'])} with a new depth, "
                f"{len(result['skipped'])} already built, {len(result['failed'])} failed; "
                f"{len(result['photos'])} photos in {out_dir}/manifest.json")

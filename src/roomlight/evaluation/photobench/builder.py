@@ -45,7 +45,7 @@ from roomlight.evaluation.photobench import case as fmt
 from roomlight.evaluation.photobench.config import PhotoBenchConfig
 from roomlight.evaluation.photobench.degrade import degrade_depth
 from roomlight.evaluation.photobench.objects import PROBE_MATERIALS
-from roomlight.evaluation.photobench.staging import StagingError, stage_photo
+from roomlight.evaluation.photobench.staging import StagingError, palette, stage_photo
 
 __all__ = ["MANIFEST", "MANIFEST_VERSION", "ROOMS_PER_PHOTO", "photo_name", "build_photo", "update_depth",
            "render_probe_truth", "probe_window",
@@ -82,18 +82,54 @@ def _depth_for_methods(true_depth: np.ndarray, config: PhotoBenchConfig, index: 
     return degrade_depth(true_depth, config.depth_noise, config.depth_scale, rng)
 
 
-def _stage(config: PhotoBenchConfig, index: int):
-    from roomlight.evaluation.photobench.roomscene import RoomScenes
-    from roomlight.datagen.synth.rooms import generate_room
+#: Generator seeds drawn when looking for a room of the kind a wide-suite photo asks for.
+ROOM_SEARCH = 1000
 
+
+def _room(config: PhotoBenchConfig, rng: np.random.Generator, plan):
+    """A generated room: the next seed's (the original suite), or the next one of the plan's kind,
+    edited as the plan says (the wide suite); returns (room, what was edited)."""
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.evaluation.photobench.variety import edit_room, room_matches
+
+    if plan is None:
+        return generate_room(int(rng.integers(0, 2**31 - 1))), {}
+    for _ in range(ROOM_SEARCH):
+        room = generate_room(int(rng.integers(0, 2**31 - 1)))
+        if room_matches(room, plan.room_kind):
+            return room, edit_room(room, plan, np.random.default_rng([room.seed, _SALT_ROOM]))
+    raise PhotoBuildError(f"no {plan.room_kind!r} room among {ROOM_SEARCH} generated rooms")
+
+
+def _stage(config: PhotoBenchConfig, index: int, captured_lights=None):
+    """(scenes, staging, what the photo is: its plan, room edits and captured panorama)."""
+    from roomlight.evaluation.photobench.roomscene import RoomScenes
+
+    plan = None
+    if config.suite == "wide":
+        from roomlight.evaluation.photobench.variety import photo_plan
+
+        plan = photo_plan(config, index)
     rng = np.random.default_rng([config.seed, index, _SALT_ROOM])
     problems = []
     for _ in range(ROOMS_PER_PHOTO):
-        room_seed = int(rng.integers(0, 2**31 - 1))
-        scenes = RoomScenes(generate_room(room_seed), config.max_depth)
+        about: dict = {} if plan is None else {"plan": plan.to_dict()}
+        if plan is not None and plan.light == "captured":
+            from roomlight.evaluation.photobench.captured import CapturedSet, find_captured_lights
+
+            lights = find_captured_lights(captured_lights)
+            panorama = lights[(index // config.captured_every) % len(lights)]
+            scenes = CapturedSet(panorama, int(rng.integers(0, 2**31 - 1)), config.max_depth)
+            about["captured"] = {"panorama": panorama.name, **scenes.room.summary()}
+        else:
+            room, edits = _room(config, rng, plan)
+            scenes = RoomScenes(room, config.max_depth)
+            if edits:
+                about["edits"] = edits
         try:
-            staging = stage_photo(scenes, np.random.default_rng([config.seed, index, room_seed, _SALT_STAGE]), config)
-            return scenes, staging
+            staging = stage_photo(scenes, np.random.default_rng([config.seed, index, scenes.room.seed, _SALT_STAGE]),
+                                  config, fov=None if plan is None else plan.fov)
+            return scenes, staging, about
         except StagingError as exc:
             problems.append(str(exc))
     raise PhotoBuildError(f"{photo_name(index)}: no room of {ROOMS_PER_PHOTO} could be staged ({problems[-1]})")
@@ -137,27 +173,32 @@ def _labels(coverage: np.ndarray) -> np.ndarray:
     return labels
 
 
-def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
+def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=None) -> dict:
     """Build photo ``index`` into ``out_dir/photo-<index>`` (see the module docstring); returns its record."""
     from roomlight.evaluation.harness.metrics import score_view
     from roomlight.evaluation.bench.recording import record_ldr, saturated_fraction
     from roomlight.core.color import log_average_np
     from roomlight.core.io import write_panorama
-    from roomlight.evaluation.photobench.tracing import trace_coverage, trace_depth, trace_image
+    from roomlight.evaluation.photobench.tracing import emitter_fraction, trace_coverage, trace_depth, trace_image
     from roomlight.datagen.synth.camera import render_depth, render_radiance
     from roomlight.datagen.synth.spec import GENERATOR_VERSION
 
     t0 = time.perf_counter()
     out = Path(out_dir)
     name = photo_name(index)
-    scenes, st = _stage(config, index)
+    scenes, st, about = _stage(config, index, captured_lights)
     room, room_scene = scenes.room, scenes.base
+    open_set = "captured" in about  # rays may leave the set: they get FAR_DEPTH
     seeds = photo_seeds(config, index)
     cam = st.camera
     meshes = {o.id: o.mitsuba_mesh() for o in st.objects}
     photo_scene = scenes.scene(meshes)
     image = trace_image(photo_scene, cam, config.spp, seeds["photo"])
     depth = trace_depth(photo_scene, cam)
+    if open_set:
+        from roomlight.evaluation.photobench.captured import FAR_DEPTH
+
+        depth = np.where(np.isfinite(depth), np.minimum(depth, FAR_DEPTH), FAR_DEPTH).astype(np.float32)
     if not np.isfinite(depth).all() or (depth <= 0).any():
         raise PhotoBuildError(f"{name}: a camera ray left room {room.seed} (depth not finite); a generator bug")
     labels = _labels(trace_coverage(photo_scene, cam, list(meshes.values()), config.supersample))
@@ -180,13 +221,16 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
     from roomlight.evaluation.photobench.insertion import render_insert_truth, stage_inserts
 
     inserts = stage_inserts(st.probes, config.inserts, np.random.default_rng([config.seed, index, _SALT_INSERT]),
-                            config.metal_fraction, config.roughness)
+                            config.metal_fraction, config.roughness, palette(config))
     if inserts:  # the photo's scene with the new objects, with the photo's seed: elsewhere the photo itself
         insert_image, insert_labels = render_insert_truth(scenes, meshes, inserts, cam, config.spp, seeds["photo"],
                                                           config.supersample, k)
     oracle_rad = render_radiance(room_scene, st.oracle_center, height=config.oracle_height, spp=config.oracle_spp,
                                  seed=seeds["oracle"]) * k
     oracle_depth = render_depth(room_scene, st.oracle_center, height=config.oracle_height)
+    if open_set:
+        oracle_depth = np.where(np.isfinite(oracle_depth), np.minimum(oracle_depth, FAR_DEPTH), FAR_DEPTH)
+        oracle_depth = oracle_depth.astype(np.float32)
 
     tmp = out / f".{name}.{os.getpid()}.partial"
     if tmp.exists():
@@ -232,6 +276,7 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig) -> dict:
             "name": name, "index": index, "room_seed": int(room.seed), "generator": GENERATOR_VERSION,
             "room": {"type": room.room_type, "lighting": room.lighting, "shell": room.shell,
                      "height": float(room.height), "capture": [float(c) for c in room.capture]},
+            **about, "emitters_in_view": emitter_fraction(photo_scene, cam),
             "camera": cam.to_dict(), "target": [float(c) for c in st.target], "staging_tries": st.tries,
             "objects": [o.to_dict() for o in st.objects], "probes": probes,
             "oracle": {"center": [float(c) for c in st.oracle_center], "height": config.oracle_height,
@@ -295,9 +340,11 @@ def _write_manifest(out: Path, config: PhotoBenchConfig) -> dict:
 
 
 def make_photo_benchmark(out_dir, config: PhotoBenchConfig | None = None, overwrite: bool = False,
-                         shard=(0, 1), progress: bool = True) -> dict:
+                         shard=(0, 1), progress: bool = True, captured_lights=None) -> dict:
     """Build (a shard of) the photo benchmark; returns the manifest with ``built``, ``updated``,
-    ``skipped`` and ``failed`` (name -> message) of this call added."""
+    ``skipped`` and ``failed`` (name -> message) of this call added. ``captured_lights``: the folder of
+    HDR panoramas for the wide suite's captured-light photos (default: Blender's studio lights,
+    :func:`~roomlight.evaluation.photobench.captured.find_captured_lights`)."""
     config = config or PhotoBenchConfig()
     i, n = shard
     if not (n >= 1 and 0 <= i < n):
@@ -326,7 +373,7 @@ def make_photo_benchmark(out_dir, config: PhotoBenchConfig | None = None, overwr
     try:
         for k in todo:
             try:
-                build_photo(k, out, config)
+                build_photo(k, out, config, captured_lights)
                 built.append(photo_name(k))
             except PhotoBuildError as exc:
                 failed[photo_name(k)] = str(exc)

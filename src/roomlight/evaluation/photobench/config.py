@@ -9,11 +9,14 @@ from roomlight.core.color import MIDDLE_GREY
 from roomlight.core.config import StrictConfig
 from roomlight.errors import RoomlightError
 
-__all__ = ["PhotoBenchConfig", "DEPTH_FIELDS"]
+__all__ = ["PhotoBenchConfig", "DEPTH_FIELDS", "SUITES", "suite_config"]
 
 #: Settings that change only the depth file the methods get (``depth.exr``): a photo built with
 #: other values of these alone is updated in place instead of being rendered again.
 DEPTH_FIELDS = ("depth_noise", "depth_scale")
+#: The photo suites: the generator's own rooms and cameras, and the wide suite (photobench.variety).
+SUITES = ("rooms", "wide")
+_WIDE_DEFAULTS = {"suite": "rooms", "fov_range": None, "pitch_range": None, "captured_every": 0}
 
 
 @dataclass(frozen=True)
@@ -46,6 +49,11 @@ class PhotoBenchConfig(StrictConfig):
     supersample: int = 4                                 #: mask rays per pixel along each axis
     depth_noise: float = 0.0                             #: relative smooth noise on the methods' depth (0: exact)
     depth_scale: float = 1.0                             #: scale of the methods' depth (1: exact)
+    # The wide suite (photobench.variety); at these defaults a photo is built exactly as the original suite's.
+    suite: str = "rooms"                                 #: ``rooms`` (the generator's own) or ``wide``
+    fov_range: tuple[float, float] | None = None         #: a horizontal field of view drawn per photo (wide)
+    pitch_range: tuple[float, float] | None = None       #: a camera pitch drawn per staging attempt (wide)
+    captured_every: int = 0                              #: every k-th photo lit by a captured panorama (0: none)
 
     def __post_init__(self):
         checks = [(self.n >= 1, "--n must be at least 1"),
@@ -68,7 +76,13 @@ class PhotoBenchConfig(StrictConfig):
                   (self.oracle_height >= 4, "oracle_height must be at least 4"),
                   (self.supersample >= 1, "supersample must be at least 1"),
                   (0.0 <= self.depth_noise < 1.0, "--depth-noise must be in [0, 1)"),
-                  (self.depth_scale > 0.0, "--depth-scale must be positive")]
+                  (self.depth_scale > 0.0, "--depth-scale must be positive"),
+                  (self.suite in SUITES, f"--suite must be one of {', '.join(SUITES)}"),
+                  (self.fov_range is None or 0.0 < self.fov_range[0] <= self.fov_range[1] < 150.0,
+                   "fov_range must be an increasing range in (0, 150) degrees"),
+                  (self.pitch_range is None or -89.0 < self.pitch_range[0] <= self.pitch_range[1] < 89.0,
+                   "pitch_range must be an increasing range in (-89, 89) degrees"),
+                  (self.captured_every >= 0, "captured_every must be at least 0")]
         for ok, message in checks:
             if not ok:
                 raise RoomlightError(f"make-photos: {message}")
@@ -78,10 +92,14 @@ class PhotoBenchConfig(StrictConfig):
 
     def scene_settings(self) -> dict:
         """The settings a photo's renders depend on (all but ``n`` and the depth degradation): a
-        built photo is reused only when they match."""
+        built photo is reused only when they match. The wide suite's fields are left out at their
+        defaults, so photos built before they existed still match."""
         d = self.to_dict()
         for k in ("n", *DEPTH_FIELDS):
             d.pop(k)
+        for k, default in _WIDE_DEFAULTS.items():
+            if d[k] == default:
+                d.pop(k)
         return d
 
     def depth_settings(self) -> dict:
@@ -90,3 +108,15 @@ class PhotoBenchConfig(StrictConfig):
     def override(self, **changes) -> PhotoBenchConfig:
         """A copy with the fields that are not None changed; unknown names and wrong types are refused."""
         return super().override(**{k: v for k, v in changes.items() if v is not None})
+
+
+def suite_config(suite: str, **fields) -> PhotoBenchConfig:
+    """The settings of a suite, ``fields`` replacing its own: ``rooms`` is :class:`PhotoBenchConfig`'s
+    defaults; ``wide`` draws its rooms, cameras, objects and light as :mod:`~roomlight.evaluation.photobench.variety`
+    says (fixed here, before any photo of it is fitted)."""
+    if suite not in SUITES:
+        raise RoomlightError(f"make-photos: --suite must be one of {', '.join(SUITES)}, got {suite!r}")
+    base = {} if suite == "rooms" else dict(
+        suite="wide", eye_height=(0.75, 1.75), fov_range=(40.0, 90.0), pitch_range=(-35.0, 10.0), captured_every=3,
+        roughness=(0.05, 0.8), metal_fraction=0.3)
+    return PhotoBenchConfig(**{**base, **fields})

@@ -37,13 +37,13 @@ _GAP = 0.002  # the probes' hover above their support (roomlight.evaluation.phot
 
 
 def stage_inserts(probes: list[ProbeSphere], count: int, rng: np.random.Generator, metal_fraction: float = 0.3,
-                  roughness=(0.15, 0.8)) -> list[InsertedObject]:
+                  roughness=(0.15, 0.8), palette: str = "hsv") -> list[InsertedObject]:
     """``count`` new objects at the first probe positions, each resting on its probe's support."""
     out = []
     for k, p in enumerate(probes[:count]):
         shape = INSERT_SHAPES[int(rng.integers(len(INSERT_SHAPES)))]
         yaw = float(rng.uniform(0.0, 360.0))
-        material = draw_material(rng, metal_fraction, tuple(roughness))
+        material = draw_material(rng, metal_fraction, tuple(roughness), palette)
         probe_obj = InsertedObject(f"insert{k + 1}", INSERT_LABEL0 + k, shape, (float(p.radius),), yaw, (0.0, 0.0, 0.0),
                                    material)
         v, _ = probe_obj.local_geometry()

@@ -77,13 +77,31 @@ class PrincipledMaterial:
 
 
 def draw_material(rng: np.random.Generator, metal_fraction: float = 0.3,
-                  roughness_range=(0.15, 0.8)) -> PrincipledMaterial:
-    """A random material: hue uniform, saturation 0-0.8, value 0.3-0.95 in sRGB-encoded HSV
-    (linearised), roughness uniform in ``roughness_range``, metallic 1 with probability
-    ``metal_fraction`` and 0 otherwise (real surfaces are rarely in between)."""
+                  roughness_range=(0.15, 0.8), palette: str = "hsv") -> PrincipledMaterial:
+    """A random material, roughness uniform in ``roughness_range``, metallic 1 with probability
+    ``metal_fraction`` and 0 otherwise (real surfaces are rarely in between).
+
+    ``palette``: ``hsv`` (the original suite's): hue uniform, saturation 0-0.8, value 0.3-0.95 in
+    sRGB-encoded HSV (linearised); ``wide`` (the wide suite's, the whole range of real surfaces): white
+    (0.85-0.9), black (0.03-0.05), a saturated colour, or a grey log-uniform in 0.03-0.9, a quarter each.
+    """
     from roomlight.datagen.synth.color import hsv_albedo
 
-    albedo = hsv_albedo(float(rng.uniform()), float(rng.uniform(0.0, 0.8)), float(rng.uniform(0.3, 0.95)))
+    if palette == "hsv":
+        albedo = hsv_albedo(float(rng.uniform()), float(rng.uniform(0.0, 0.8)), float(rng.uniform(0.3, 0.95)))
+    elif palette == "wide":
+        kind = int(rng.integers(4))
+        if kind == 0:
+            albedo = (float(rng.uniform(0.85, 0.9)),) * 3
+        elif kind == 1:
+            albedo = (float(rng.uniform(0.03, 0.05)),) * 3
+        elif kind == 2:
+            albedo = hsv_albedo(float(rng.uniform()), float(rng.uniform(0.85, 1.0)), float(rng.uniform(0.6, 1.0)))
+        else:
+            albedo = (float(math.exp(rng.uniform(math.log(0.03), math.log(0.9)))),) * 3
+        albedo = tuple(float(np.clip(c, 0.03, 0.9)) for c in albedo)
+    else:
+        raise ValueError(f"draw_material: unknown palette {palette!r}")
     roughness = float(rng.uniform(*roughness_range))
     metallic = 1.0 if rng.uniform() < metal_fraction else 0.0
     return PrincipledMaterial(tuple(float(c) for c in albedo), roughness, metallic)

@@ -46,7 +46,7 @@ from roomlight.evaluation.photobench.tracing import trace_coverage
 from roomlight.core.render.raycast import RayCaster, sphere_directions
 from roomlight.core.render.variant import mitsuba
 
-__all__ = ["StagingError", "Staging", "RayCaster", "eye_position", "choose_target", "support_points",
+__all__ = ["StagingError", "Staging", "RayCaster", "palette", "eye_position", "choose_target", "support_points",
            "free_column", "stage_photo", "sphere_directions", "TRIES_PER_ROOM"]
 
 #: Targets tried in one room before the room is given up.
@@ -173,7 +173,7 @@ def _place_objects(caster, camera, supports, target, rng, config: PhotoBenchConf
             size = (radius,)
         k = len(placed) + 1
         obj = InsertedObject(f"obj{k}", k, shape, size, float(rng.uniform(0, 360)), (0.0, 0.0, 0.0),
-                             draw_material(rng, config.metal_fraction, config.roughness))
+                             draw_material(rng, config.metal_fraction, config.roughness, palette(config)))
         v, _ = obj.local_geometry()
         rho = float(np.max(np.hypot(v[:, 0], v[:, 2])))
         h = float(v[:, 1].max() - v[:, 1].min())
@@ -264,12 +264,22 @@ def _oracle_center(caster: RayCaster, probes: list[ProbeSphere]) -> np.ndarray:
     return best
 
 
-def stage_photo(scenes, rng: np.random.Generator, config: PhotoBenchConfig) -> Staging:
+def palette(config: PhotoBenchConfig) -> str:
+    """The objects' colour palette of a suite (:func:`~roomlight.evaluation.photobench.objects.draw_material`)."""
+    return "wide" if config.suite == "wide" else "hsv"
+
+
+def stage_photo(scenes, rng: np.random.Generator, config: PhotoBenchConfig, fov: float | None = None) -> Staging:
     """Stage one photograph in a room (see the module docstring); raises :class:`StagingError`.
 
     Args:
-        scenes: the room's :class:`~roomlight.evaluation.photobench.roomscene.RoomScenes`.
+        scenes: the room's :class:`~roomlight.evaluation.photobench.roomscene.RoomScenes` (or a set with
+            its interface, :class:`~roomlight.evaluation.photobench.captured.CapturedSet`).
+        fov: the photo's horizontal field of view (default ``config.fov``). With ``config.pitch_range``
+            each attempt draws a pitch and aims the camera at the target's vertical with it.
     """
+    from roomlight.evaluation.photobench.variety import aim_at_pitch
+
     room = scenes.room
     caster = RayCaster(scenes.base)
     eye = eye_position(room, caster, rng, config.eye_height)
@@ -277,7 +287,8 @@ def stage_photo(scenes, rng: np.random.Generator, config: PhotoBenchConfig) -> S
     for attempt in range(1, TRIES_PER_ROOM + 1):
         try:
             target = choose_target(caster, eye, rng)
-            camera = PhotoCamera.look_at(eye, target, config.fov, config.width, config.height)
+            look = target if config.pitch_range is None else aim_at_pitch(eye, target, rng.uniform(*config.pitch_range))
+            camera = PhotoCamera.look_at(eye, look, fov or config.fov, config.width, config.height)
             supports = support_points(caster, camera)
             if len(supports) < 8:
                 raise StagingError("too few visible horizontal surfaces")

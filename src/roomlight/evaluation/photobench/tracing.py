@@ -20,7 +20,7 @@ from roomlight.fitting.photo.camera import PhotoCamera
 from roomlight.core.render.raycast import shape_coverage
 from roomlight.core.render.variant import mitsuba
 
-__all__ = ["MAX_RAYS_PER_PASS", "trace_image", "trace_depth", "trace_coverage", "camera_rays", "check_window"]
+__all__ = ["MAX_RAYS_PER_PASS", "trace_image", "trace_depth", "trace_coverage", "emitter_fraction", "camera_rays", "check_window"]
 
 #: Rays traced per pass (bounds memory: ~100 bytes of state per ray).
 MAX_RAYS_PER_PASS = 1 << 22
@@ -132,3 +132,16 @@ def trace_coverage(scene, camera: PhotoCamera, shapes: list, supersample: int = 
     return shape_coverage(scene, lambda x, y: camera_rays(mi, dr, camera, mi.Float((x / s).astype(np.float32)),
                                                           mi.Float((y / s).astype(np.float32))),
                           shapes, camera.width, camera.height, s, MAX_RAYS_PER_PASS)
+
+
+def emitter_fraction(scene, camera: PhotoCamera) -> float:
+    """The share of the frame's pixel centres whose ray first meets a light source: a lamp's or a
+    window's emitting surface, or (rays that leave the scene) an environment emitter."""
+    import drjit as dr
+
+    mi = mitsuba()
+    x, y = camera.pixel_centres()
+    ray = camera_rays(mi, dr, camera, mi.Float(x.astype(np.float32)), mi.Float(y.astype(np.float32)))
+    si = scene.ray_intersect(ray)
+    lit = dr.select(si.is_valid(), si.shape.is_emitter(), scene.environment() is not None)
+    return float(np.mean(np.asarray(lit, bool)))
