@@ -120,3 +120,32 @@ def test_photo_fits_use_the_scalar_exposure_by_default_and_synthetic_fits_the_wh
     assert FitConfig().white_balance is True
     assert all(cfg.white_balance is False for cfg in PHOTO_PRESETS.values())
     assert photo_config("fast", white_balance=True).white_balance is True
+
+
+def test_an_albedo_range_holds_every_albedo_inside_it_and_starts_at_half():
+    """albedo = lo + (hi - lo) sigmoid(x): 0.5 at the start, never outside [lo, hi] whatever x, the
+    roughness and metallic untouched, a set value read back, and the gradient of the mapping by hand."""
+    from roomlight.fitting.photo import ObjectMaterials
+
+    m = ObjectMaterials([1, 2], albedo_range=(0.03, 0.9))
+    assert torch.allclose(m.values(), torch.full((2, 5), 0.5), atol=1e-6)
+    with torch.no_grad():
+        m.logits[0, :3] = torch.tensor([-40.0, 0.0, 40.0])
+    v = m.values()[0]
+    assert float(v[0]) == pytest.approx(0.03, abs=1e-6) and float(v[2]) == pytest.approx(0.9, abs=1e-6)
+    assert float(v[1]) == pytest.approx(0.03 + 0.87 * 0.5, abs=1e-6) and float(v[3]) == pytest.approx(0.5)
+    m.set_values(2, albedo=(0.05, 0.3, 0.85), roughness=0.2)
+    assert m.values()[1, :4].tolist() == pytest.approx([0.05, 0.3, 0.85, 0.2], abs=1e-5)
+    m.set_values(2, albedo=(0.0, 0.5, 1.0))      # outside: held at the bounds
+    assert m.values()[1, [0, 2]].tolist() == pytest.approx([0.03, 0.9], abs=1e-5)
+    # d albedo / dx = (hi - lo) s (1 - s): 0.87 / 4 at x = 0
+    with torch.no_grad():
+        m.logits[1, 1] = 0.0
+    m.logits.grad = None
+    m.values()[1, 1].backward()
+    assert float(m.logits.grad[1, 1]) == pytest.approx(0.87 / 4, rel=1e-6)
+    # the full range is the paper's parametrisation, bit for bit
+    plain, full = ObjectMaterials([1]), ObjectMaterials([1], albedo_range=(0.0, 1.0))
+    assert torch.equal(plain.values(), full.values()) and not full.bounded
+    with pytest.raises(Exception, match="albedo_range"):
+        ObjectMaterials([1], albedo_range=(0.6, 0.9))

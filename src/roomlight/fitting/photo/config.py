@@ -54,6 +54,7 @@ class PhotoFitConfig(FitConfig):
     albedo_prior: float = 0.3             #: weight of the log-normal reflectance prior on the objects' mean albedo (0 = off)
     albedo_prior_mean: float = 0.3        #: the typical mean albedo over R, G, B that prior is centred on
     albedo_prior_average: str = "arithmetic"  #: which mean over R, G, B it holds: arithmetic or geometric (see docs/photo.md)
+    albedo_range: tuple[float, float] = (0.0, 1.0)  #: the objects' albedo is held inside this range ((0.03, 0.9): real surfaces')
     #: the white balance beside the exposure (FitConfig.white_balance) is off for photos: measured on the
     #: photo benchmark it raised the probes' colour error by 1.4-3.0 degrees and gained nothing
     #: (docs/results.md#white-balance); --set white_balance=true turns it on
@@ -83,6 +84,8 @@ class PhotoFitConfig(FitConfig):
             (0 < self.albedo_prior_mean < 1, "albedo_prior_mean must be in (0, 1)"),
             (self.albedo_prior_average in ("geometric", "arithmetic"),
              "albedo_prior_average must be geometric or arithmetic"),
+            (len(self.albedo_range) == 2 and 0.0 <= self.albedo_range[0] < 0.5 < self.albedo_range[1] <= 1.0,
+             "albedo_range must be [lo, hi] with 0 <= lo < 0.5 < hi <= 1 (the fit starts at 0.5)"),
         ]
         for ok, message in checks:
             if not ok:

@@ -283,7 +283,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
                                         torch.from_numpy(contained[2]))
 
     if materials is None:
-        materials = ObjectMaterials(geometry.labels_present)
+        materials = ObjectMaterials(geometry.labels_present, albedo_range=tuple(config.albedo_range))
     # The reflectance prior settles how the brightness splits between a free light and the albedos;
     # under a light held fixed there is nothing to split, and the prior would only bias the albedos.
     light_is_free = any(p.requires_grad for p in light.parameters())

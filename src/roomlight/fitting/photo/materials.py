@@ -2,7 +2,9 @@
 
 Each object has an albedo (RGB base colour), a roughness and a metallic value, each the sigmoid
 of a free parameter, so every value stays in (0, 1) however far Adam moves it; the parameters
-start at 0, i.e. every value at 0.5 (the paper's initialisation). They reach Mitsuba's
+start at 0, i.e. every value at 0.5 (the paper's initialisation). ``albedo_range`` can hold the
+albedo inside the range real surfaces span (about 0.03 to 0.9): albedo = lo + (hi - lo) sigmoid(x),
+started at 0.5 all the same. They reach Mitsuba's
 ``principled`` BSDF of the object's mesh (``<id>.bsdf.base_color.value``, ``.roughness.value``,
 ``.metallic.value``) through :meth:`ObjectMaterials.scene_values` with every render, so the
 renderer's gradients reach them.
@@ -37,11 +39,18 @@ class ObjectMaterials(torch.nn.Module):
         free: the parts that are fitted (:data:`PARTS`); the others keep the values they are given.
     """
 
-    def __init__(self, labels: list[int], init: float = 0.5, free=PARTS):
+    def __init__(self, labels: list[int], init: float = 0.5, free=PARTS, albedo_range=(0.0, 1.0)):
         super().__init__()
         self.labels = [int(lab) for lab in labels]
+        lo, hi = (float(a) for a in albedo_range)
+        if not 0.0 <= lo < init < hi <= 1.0:
+            raise RoomlightError(f"materials: albedo_range must hold the start {init} inside [0, 1], got {albedo_range}")
+        self.albedo_range = (lo, hi)
         start = torch.logit(torch.tensor(float(init)))
         self.logits = torch.nn.Parameter(torch.full((len(self.labels), 5), float(start)))
+        if self.bounded:
+            with torch.no_grad():
+                self.logits[:, :3] = torch.logit(torch.tensor((float(init) - lo) / (hi - lo)))
         unknown = set(free) - set(PARTS)
         if unknown:
             raise RoomlightError(f"materials: unknown part(s) {sorted(unknown)}; choose from {', '.join(PARTS)}")
@@ -55,9 +64,19 @@ class ObjectMaterials(torch.nn.Module):
             # Held parts get no gradient, so Adam leaves them exactly where set_values put them.
             self.logits.register_hook(lambda g: g * self.free_mask)
 
+    @property
+    def bounded(self) -> bool:
+        """Whether the albedo is held inside a range narrower than (0, 1)."""
+        return self.albedo_range != (0.0, 1.0)
+
     def values(self) -> torch.Tensor:
-        """(n, 5) albedo R, G, B, roughness, metallic in (0, 1), differentiable."""
-        return torch.sigmoid(self.logits)
+        """(n, 5) albedo R, G, B, roughness, metallic in (0, 1) (the albedo inside ``albedo_range``),
+        differentiable."""
+        v = torch.sigmoid(self.logits)
+        if not self.bounded:
+            return v
+        lo, hi = self.albedo_range
+        return torch.cat([lo + (hi - lo) * v[:, :3], v[:, 3:]], dim=1)
 
     def albedo_prior(self, typical: float, average: str = "arithmetic") -> torch.Tensor:
         """Mean over the objects of (1 - metallic) * ln(a / typical)^2, a the object's mean albedo.
@@ -86,7 +105,9 @@ class ObjectMaterials(torch.nn.Module):
             return self.logits.sum() * 0.0
         v = self.values()
         dielectric = 1.0 - v[:, 4].detach()
-        if average == "geometric":
+        if average == "geometric" and self.bounded:
+            log_ratio = torch.log(v[:, :3]).mean(dim=1) - math.log(float(typical))
+        elif average == "geometric":
             # ln of the sigmoid, computed stably: ln sigmoid(x) = -softplus(-x).
             log_ratio = -torch.nn.functional.softplus(-self.logits[:, :3]).mean(dim=1) - math.log(float(typical))
         elif average == "arithmetic":
@@ -113,12 +134,15 @@ class ObjectMaterials(torch.nn.Module):
         return principled_bsdf(v[:3], v[3], v[4])
 
     def set_values(self, label: int, albedo=None, roughness: float | None = None, metallic: float | None = None) -> None:
-        """Set (some of) an object's values, e.g. to start from or hold known materials; in (0, 1)."""
+        """Set (some of) an object's values, e.g. to start from or hold known materials; in (0, 1), the
+        albedo inside ``albedo_range`` (a value outside is held at its bound)."""
         k = self.labels.index(int(label))
         eps = 1e-6
         with torch.no_grad():
             if albedo is not None:
-                self.logits[k, :3] = torch.logit(torch.as_tensor(albedo, dtype=torch.float32).clamp(eps, 1 - eps))
+                lo, hi = self.albedo_range
+                a = (torch.as_tensor(albedo, dtype=torch.float32) - lo) / (hi - lo)
+                self.logits[k, :3] = torch.logit(a.clamp(eps, 1 - eps))
             if roughness is not None:
                 self.logits[k, 3] = torch.logit(torch.tensor(float(roughness)).clamp(eps, 1 - eps))
             if metallic is not None:
