@@ -26,9 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.core.color import LOG_EPS, luminance_np, luminance_torch
-from roomlight.errors import InputFileError, ShapeError
 from roomlight.core.io.depth import read_depth
 from roomlight.core.io.exr import DEPTH_CHANNEL, read_exr_with_header, write_exr
+from roomlight.core.io.jsonable import json_default
+from roomlight.errors import InputFileError, ShapeError
 from roomlight.core.io.rgbe import read_hdr_with_header
 from roomlight.core.io.validate import (
     as_numpy_image,
@@ -268,18 +269,10 @@ def write_panorama(
         if d.shape != (h, w):
             raise ShapeError(f"write_panorama: depth is {d.shape}, radiance is {(h, w)}")
         channels[DEPTH_CHANNEL] = d
-    attributes = {METADATA_ATTRIBUTE: json.dumps(meta, sort_keys=True, default=_json_default)}
+    attributes = {METADATA_ATTRIBUTE: json.dumps(meta, sort_keys=True, default=json_default)}
     write_exr(path, channels, half={"R", "G", "B"} if half else False, attributes=attributes)
 
 
-def _json_default(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"write_panorama: metadata value of type {type(obj).__name__} is not JSON")
 
 
 # --------------------------------------------------------------------------------------------

@@ -18,8 +18,8 @@ import os
 import traceback
 from pathlib import Path
 
-import numpy as np
 
+from roomlight.core.io.jsonable import json_default
 from roomlight.evaluation.harness.errors import BenchError
 
 __all__ = ["RESULT", "RUN_FILE", "json_default", "write_json", "record_failure", "check_settings", "check_run_file",
@@ -29,17 +29,6 @@ RESULT = "result.json"
 RUN_FILE = "run.json"
 #: A case's own fit writes a result.json of its own in this sub-folder: not a case record.
 _FIT_DIR = "fit"
-
-
-def json_default(obj):
-    """``json.dumps``'s ``default`` for numpy values and paths."""
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
 def write_json(path: Path, data) -> None:

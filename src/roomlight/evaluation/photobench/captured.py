@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from roomlight.errors import RoomlightError
+from roomlight.evaluation.photobench.roomscene import SceneSet
 
 __all__ = ["FAR_DEPTH", "ENV_LIGHTS", "CapturedSet", "CapturedRoom", "find_captured_lights"]
 
@@ -88,9 +89,9 @@ def _box(name: str, centre, size, albedo, roughness: float):
     return mitsuba_mesh(name, v, f, bsdf)
 
 
-class CapturedSet:
-    """A table set under a captured panorama, with :class:`~roomlight.evaluation.photobench.roomscene.RoomScenes`'
-    interface (``room``, ``entries``, ``base``, ``scene(extra)``).
+class CapturedSet(SceneSet):
+    """A table set under a captured panorama, loaded as :class:`~roomlight.evaluation.photobench.roomscene.RoomScenes`
+    loads a room (``room``, ``entries``, ``base``, ``scene(extra)``).
 
     Args:
         panorama: the captured HDR panorama (.exr); seed: draws the set (sizes, albedos, the panorama's turn).
@@ -122,12 +123,3 @@ class CapturedSet:
             parts["wall_albedo"] = wall_albedo
         self.room = CapturedRoom(int(seed), panorama.stem, (0.0, 1.2, 0.6), env_yaw_deg=round(yaw, 4), parts=parts)
         self.base = self.scene()
-
-    def scene(self, extra: dict | None = None):
-        """A ``mi.Scene`` of the set plus ``extra`` entries (shapes keyed by id)."""
-        from roomlight.core.render.variant import mitsuba
-
-        clash = sorted(set(extra or {}) & set(self.entries))
-        if clash:
-            raise KeyError(f"CapturedSet: entries {clash} would replace the set's own")
-        return mitsuba().load_dict({**self.entries, **(extra or {})})

@@ -10,10 +10,26 @@ from __future__ import annotations
 
 from roomlight.core.render.variant import mitsuba
 
-__all__ = ["RoomScenes"]
+__all__ = ["SceneSet", "RoomScenes"]
 
 
-class RoomScenes:
+class SceneSet:
+    """Instantiated Mitsuba entries (``entries``: the integrator, shapes and emitters of a set) that load
+    as a scene with other shapes added. Subclasses fill ``entries`` and ``room`` (what the staging and
+    the photo record read) and call :meth:`scene` once for ``base``."""
+
+    entries: dict
+    room: object
+
+    def scene(self, extra: dict | None = None):
+        """A ``mi.Scene`` of the set plus ``extra`` entries (shapes keyed by id)."""
+        clash = sorted(set(extra or {}) & set(self.entries))
+        if clash:
+            raise KeyError(f"{type(self).__name__}: entries {clash} would replace the set's own")
+        return mitsuba().load_dict({**self.entries, **(extra or {})})
+
+
+class RoomScenes(SceneSet):
     """Scenes of one room (see the module docstring).
 
     Args:
@@ -29,10 +45,3 @@ class RoomScenes:
         self.room = room
         self.entries = scene_entries(room, max_depth)
         self.base = self.scene()
-
-    def scene(self, extra: dict | None = None):
-        """A ``mi.Scene`` of the room plus ``extra`` entries (shapes keyed by id)."""
-        clash = sorted(set(extra or {}) & set(self.entries))
-        if clash:
-            raise KeyError(f"RoomScenes: entries {clash} would replace the room's own")
-        return mitsuba().load_dict({**self.entries, **(extra or {})})
