@@ -50,6 +50,17 @@ def test_the_wide_palette_spans_black_to_white_and_saturated_colours():
     assert min(m.roughness for m in mats) < 0.06
 
 
+def test_a_room_without_any_light_is_no_kind_of_room():
+    """Seed 700201908's room is small and has neither a lamp nor a window: the wide suite must not
+    photograph it (it did once, and the photo was black)."""
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.evaluation.photobench.variety import room_matches
+
+    dark = generate_room(700201908)
+    assert not dark.emitters() and not dark.windows and dark.lighting == "interior"
+    assert not any(room_matches(dark, kind) for kind in set(ROOM_KINDS))
+
+
 def test_aiming_at_a_pitch_keeps_heading_and_distance():
     eye, target = np.array([0.0, 1.0, 0.0]), np.array([3.0, 0.2, -4.0])
     for pitch in (-35.0, 0.0, 10.0):

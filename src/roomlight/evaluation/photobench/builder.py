@@ -194,6 +194,8 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=N
     meshes = {o.id: o.mitsuba_mesh() for o in st.objects}
     photo_scene = scenes.scene(meshes)
     image = trace_image(photo_scene, cam, config.spp, seeds["photo"])
+    if not (image > 0).any():
+        raise PhotoBuildError(f"{name}: the photo is black: room {room.seed} has no light the camera sees")
     depth = trace_depth(photo_scene, cam)
     if open_set:
         from roomlight.evaluation.photobench.captured import FAR_DEPTH

@@ -81,8 +81,12 @@ def _area(room) -> float:
 
 
 def room_matches(room, kind: str) -> bool:
-    """Whether a generated room is of the asked kind (see :data:`ROOM_KINDS`)."""
+    """Whether a generated room is of the asked kind (see :data:`ROOM_KINDS`). A room with no light at all
+    (no lit lamp, no window: the generator makes some among its smallest rooms) is no kind: its photo
+    would be black."""
     lit = [light for light in room.lights if light.on]
+    if not room.emitters() and not room.windows:
+        return False
     if kind == "small":
         return _area(room) < SMALL_AREA
     if kind == "large":
