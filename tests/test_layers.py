@@ -30,7 +30,7 @@ LAYERS = [
     ["evaluation.photobench"],
     ["export"],
     ["fitting.insert"],
-    ["prior.eval", "evaluation.bench", "datagen.synth", "datagen.prepare"],
+    ["prior.eval", "evaluation.bench", "evaluation.crops", "datagen.synth", "datagen.prepare"],
     ["evaluation.harness"],
     ["fitting.photo"],
     ["fitting.inverse", "prior.data"],
