@@ -242,3 +242,57 @@ def test_viewer_of_a_photo_fit_shows_the_photograph_and_the_probe_shading_follow
     bottom = a[int(0.9 * vh):vh - 2, x0 + vw // 2:x0 + vw - 2]   # right part of the floor, away from the probe
     ref = photo[int(0.9 * 24):, 16:].reshape(-1, 3).mean(0)
     np.testing.assert_allclose(bottom.reshape(-1, 3).mean(0), ref, atol=25)
+
+
+def test_seen_texels_are_the_directions_inside_the_camera_s_frustum():
+    """A light at infinity seen by a camera at the origin looking down -z, no tilt: a texel is seen exactly
+    when its direction's horizontal and vertical angles off the axis are inside half the fields of view."""
+    import math
+    from types import SimpleNamespace
+
+    from roomlight.core.geometry.equirect import pixel_directions
+    from roomlight.fitting.insert.composite import seen_texels
+    from roomlight.fitting.photo.camera import PhotoCamera
+    from roomlight.fitting.photo.geometry import SceneTransform
+
+    h, w = 48, 96
+    cam = PhotoCamera.from_fov(70.0, 64, 48)
+    t = SceneTransform(np.eye(3), 1.0, np.zeros(3))
+    fitted = SimpleNamespace(radiance=torch.ones(h, w, 3), depth=None, transform=t)
+    seen = seen_texels(fitted, cam)
+    d = pixel_directions(h, w, dtype=torch.float64).numpy()
+    half_x = math.atan(cam.width / 2 / cam.fx)
+    half_y = math.atan(cam.height / 2 / cam.fy)
+    ahead = d[..., 2] < 0
+    ax = np.arctan2(np.abs(d[..., 0]), -d[..., 2])
+    ay = np.arctan2(np.abs(d[..., 1]), -d[..., 2])
+    expected = ahead & (ax <= half_x) & (ay <= half_y)
+    assert seen.sum() > 20 and np.array_equal(seen, expected)
+    # a 2.5D light: what is seen depends on the camera's position inside it. A camera 1 m behind the
+    # centre of a room of radius 2 sees more of the room ahead than one at the centre.
+    behind = SceneTransform(np.eye(3), 1.0, np.array([0.0, 0.0, 1.0]))
+    mesh = SimpleNamespace(radiance=torch.ones(h, w, 3), depth=torch.full((h, w), 2.0), transform=behind)
+    assert seen_texels(mesh, cam).sum() > seen.sum()
+
+
+@pytest.mark.mitsuba
+def test_the_unseen_share_is_one_under_unseen_light_only_and_falls_as_the_seen_light_grows(fitted_dir):
+    """Under a light that is dark wherever the photograph looks, all of an object's shading is from unseen
+    parts: exactly 1. Brightening only the seen texels of a uniform light lowers the share."""
+    from roomlight.core.light import Light
+    from roomlight.fitting.insert.composite import seen_texels
+
+    fitted = load_fitted_photo(fitted_dir)
+    seen = torch.from_numpy(seen_texels(fitted, fitted.case.intrinsics.scaled(32, 24)))
+    assert 0 < int(seen.sum()) < seen.numel()
+    spec = [InsertSpec("sphere", at=(16, 21), scale=0.35, material="diffuse:0.6")]
+    h, w = fitted.radiance.shape[:2]
+    shares = {}
+    for name, radiance in (("unseen only", torch.where(seen[..., None], 0.0, 0.5).expand(h, w, 3)),
+                           ("uniform", torch.full((h, w, 3), 0.5)),
+                           ("seen x4", torch.where(seen[..., None], 2.0, 0.5).expand(h, w, 3))):
+        fitted.light = Light(radiance.contiguous(), fitted.depth, fitted.kind, fitted.light.frame)
+        info = insert_objects(fitted, spec, size=32, spp=64, seed=2).info
+        shares[name] = info["objects"][0]["unseen_light_share"]
+    assert shares["unseen only"] == 1.0
+    assert 0.0 < shares["seen x4"] < shares["uniform"] < 1.0, shares

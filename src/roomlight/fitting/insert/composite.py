@@ -27,8 +27,8 @@ import numpy as np
 from roomlight.fitting.insert.fitted import FittedPhoto
 from roomlight.fitting.insert.objects import InsertSpec, PlacedObject, place_object
 
-__all__ = ["InsertResult", "insert_objects", "place_objects", "composite_objects", "estimate_albedo", "ALBEDO_RANGE",
-           "COVERAGE_RAYS"]
+__all__ = ["InsertResult", "insert_objects", "place_objects", "composite_objects", "estimate_albedo", "seen_texels",
+           "ALBEDO_RANGE", "COVERAGE_RAYS"]
 
 #: The estimated albedo of the scene's surfaces is clamped to this range: below, a surface in shadow
 #: of the fitted light would turn black and hide the new objects' light on it; above, a surface the
@@ -112,7 +112,9 @@ class _LocalScene:
         return mitsuba_mesh("local_scene", self.background_vertices, self.background_faces,
                             {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": refl}}, uvs=self.uv)
 
-    def render(self, albedo: np.ndarray | None, extra: dict, spp: int, seed: int) -> np.ndarray:
+    def render(self, albedo: np.ndarray | None, extra: dict, spp: int, seed: int, radiance=None) -> np.ndarray:
+        """The local scene with ``extra`` shapes under the fitted light (or under ``radiance`` (H, W, 3) on
+        the light's geometry)."""
         from roomlight.core.render.scene import EmitterScene
 
         f = self.fitted
@@ -121,8 +123,53 @@ class _LocalScene:
             objects["local_scene"] = self.background(albedo)
         es = EmitterScene(f.kind, tuple(f.radiance.shape[:2]), objects=objects, sensor=self.sensor,
                           integrator={"type": "path", "max_depth": self.max_depth})
-        es.set_emitter(f.radiance, f.depth)
+        es.set_emitter(f.radiance if radiance is None else radiance, f.depth)
         return es.render(spp=spp, seed=seed).numpy().astype(np.float32)
+
+
+def seen_texels(fitted: FittedPhoto, intrinsics) -> np.ndarray:
+    """(H, W) bool: the light's texels the photograph shows.
+
+    A texel is seen when its point on the light (its direction times its depth in the room frame; for a
+    light at infinity, its direction from the camera) projects inside the photograph's frame in front of
+    the camera. Occlusion by the photographed scene is not tested: a texel behind a fitted object but
+    within the frame counts as seen, since the object's own pixels constrained the light around it.
+    """
+    import torch
+
+    from roomlight.core.geometry.equirect import pixel_directions
+
+    h, w = fitted.radiance.shape[:2]
+    dirs = pixel_directions(h, w, dtype=torch.float64).numpy()
+    t = fitted.transform
+    if fitted.depth is not None:
+        v = dirs * np.asarray(fitted.depth, np.float64)[..., None] - t.translation
+    else:
+        v = dirs
+    cam = v @ t.rotation  # room -> camera frame (the rotation is orthonormal; the scale does not move a ray)
+    z = -cam[..., 2]
+    front = z > 1e-9
+    zs = np.where(front, z, 1.0)
+    x = intrinsics.cx + intrinsics.fx * cam[..., 0] / zs
+    y = intrinsics.cy - intrinsics.fy * cam[..., 1] / zs
+    return front & (x >= 0) & (x <= intrinsics.width) & (y >= 0) & (y <= intrinsics.height)
+
+
+def _unseen_shares(local: _LocalScene, fitted: FittedPhoto, placed, albedo, extra, with_obj, spp: int,
+                   seed: int) -> list[float | None]:
+    """Per object, the share of its pixels' luminance that the light's unseen texels give: the objects
+    rendered under the light with its seen texels dark, over the same under the whole light (same seed)."""
+    import torch
+
+    seen = torch.from_numpy(seen_texels(fitted, local.intrinsics))
+    unseen_light = fitted.radiance * (~seen)[..., None].to(fitted.radiance.dtype)
+    unseen = local.render(albedo, extra, spp, seed, radiance=unseen_light)
+    shares = []
+    for p in placed:
+        own = _coverage(local, [p]) > 0.5
+        total = float(_luminance(with_obj)[own].sum())
+        shares.append(None if not own.any() or total <= 0 else round(float(_luminance(unseen)[own].sum()) / total, 4))
+    return shares
 
 
 def estimate_albedo(photo: np.ndarray, white: np.ndarray, lo: float = ALBEDO_RANGE[0],
@@ -188,7 +235,7 @@ def place_objects(fitted: FittedPhoto, specs: list[InsertSpec]) -> list[PlacedOb
 
 
 def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512, spp: int = 256, seed: int = 0,
-                   max_depth: int = 5, say=None) -> InsertResult:
+                   max_depth: int = 5, say=None, unseen_share: bool = True) -> InsertResult:
     """Composite ``specs`` into the fitted photograph (module docstring).
 
     Args:
@@ -199,23 +246,29 @@ def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512
         seed: the renders' seed (the same for both: the difference is then the objects' effect).
         max_depth: longest light path.
         say: called with one line per step, or None.
+        unseen_share: record each object's share of shading from the light's unseen parts (see
+            :func:`composite_objects`; one more render).
     """
     t0 = time.perf_counter()
     placed = place_objects(fitted, specs)
     t_place = time.perf_counter() - t0
-    result = composite_objects(fitted, placed, size, spp, seed, max_depth, say)
+    result = composite_objects(fitted, placed, size, spp, seed, max_depth, say, unseen_share=unseen_share)
     result.info["timings_s"]["place"] = round(t_place, 3)
     result.info["timings_s"]["total"] = round(time.perf_counter() - t0, 3)
     return result
 
 
 def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int = 512, spp: int = 256,
-                      seed: int = 0, max_depth: int = 5, say=None, local_scene: bool = True) -> InsertResult:
+                      seed: int = 0, max_depth: int = 5, say=None, local_scene: bool = True,
+                      unseen_share: bool = False) -> InsertResult:
     """Composite objects already placed (camera frame) into the fitted photograph.
 
     ``local_scene=False`` renders the objects under the light alone, without the photograph's depth mesh
     and fitted objects: no shadow and nothing of the scene in their reflections (a naive paste, the
-    baseline differential rendering improves on).
+    baseline differential rendering improves on). ``unseen_share``: also render the objects under the
+    light's texels the photograph does not show (:func:`seen_texels`) and record, per object, the share of
+    its shading they give (``unseen_light_share`` in ``info["objects"]``): how much of its look rests on the
+    prior's guess of the room rather than on what the photograph showed.
     """
     from roomlight.fitting.photo.geometry import resize_image, working_size
 
@@ -257,9 +310,17 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     shadow = np.where(cov > 0, 1.0, shadow).astype(np.float32)
     timings["composite"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
+    objects_info = [p.to_dict() for p in placed]
+    if unseen_share and placed:
+        t4 = time.perf_counter()
+        say("rendering the objects under the light's parts the photograph does not show")
+        for entry, share in zip(objects_info, _unseen_shares(local, fitted, placed, albedo, extra, with_obj, spp,
+                                                                 seed)):
+            entry["unseen_light_share"] = share
+        timings["unseen_share"] = time.perf_counter() - t4
     info = {"light": fitted.method, "light_kind": fitted.kind, "local_scene": local_scene, "fit": str(fitted.folder),
             "size": [oh, ow],
             "spp": spp, "seed": seed, "max_depth": max_depth, "albedo_range": list(ALBEDO_RANGE),
-            "coverage_rays": COVERAGE_RAYS ** 2, "objects": [p.to_dict() for p in placed],
+            "coverage_rays": COVERAGE_RAYS ** 2, "objects": objects_info,
             "timings_s": {k: round(v, 3) for k, v in timings.items()}}
     return InsertResult(composite, photo, with_obj, without, cov, shadow, albedo, placed, info)
