@@ -17,6 +17,7 @@ from click.testing import CliRunner
 from roomlight.cli.main import cli
 from roomlight.errors import RoomlightError
 from roomlight.fitting.insert import InsertSpec, insert_objects, load_fitted_photo, parse_material, place_object
+from roomlight.fitting.insert.composite import composite_objects, place_objects
 from roomlight.fitting.insert.objects import surface_at_pixel
 
 pytestmark = [pytest.mark.usefixtures("one_torch_thread")]
@@ -152,6 +153,36 @@ def test_a_diffuse_object_in_a_room_of_uniform_radiance_shades_at_albedo_times_r
     assert inside.sum() >= 6, inside.sum()
     shade = res.composite[inside].mean(0)
     np.testing.assert_allclose(shade, albedo * L, rtol=0.05)
+
+
+@pytest.mark.mitsuba
+def test_a_light_running_through_the_photographed_scene_is_pushed_behind_it(fitted_dir):
+    """The white furnace again, with the light's surface at half the scene's distance: the depth mesh and
+    the object stand outside the light, where its back faces emit nothing. Pushed out behind them
+    (roomlight.core.emitter.enclose) the object shades at albedo x L again; left in place it does not."""
+    from roomlight.core.examples import example_room
+    from roomlight.core.light import Light
+
+    fitted = load_fitted_photo(fitted_dir)
+    L, albedo = 0.6, 0.5
+    h, w = fitted.radiance.shape[:2]
+    _, room_depth = example_room(h)
+    scene_far = float(np.nanmax(fitted.case.depth)) * fitted.transform.scale
+    fitted.light = Light(torch.full((h, w, 3), L), room_depth / room_depth.max() * 0.5 * scene_far, "mesh",
+                         fitted.light.frame)
+    fitted.case.image = np.full_like(fitted.case.image, L)
+    white = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}}
+    fitted.bsdfs = lambda: {lab: white for lab in fitted.materials}
+    spec = [InsertSpec("sphere", at=(16, 21), scale=0.35, material=f"diffuse:{albedo}")]
+    fixed = insert_objects(fitted, spec, size=32, spp=512, seed=3, unseen_share=False)
+    inside = fixed.coverage > 0.99
+    assert inside.sum() >= 6, inside.sum()
+    np.testing.assert_allclose(fixed.composite[inside].mean(0), albedo * L, rtol=0.05)
+    moved = fixed.info["light_enclosing_scene"]
+    assert moved["on"] is True and moved["texels_moved"] > 0.05
+    placed = place_objects(fitted, spec)
+    broken = composite_objects(fitted, placed, size=32, spp=512, seed=3, enclose=False)
+    assert abs(float(broken.composite[inside].mean()) / (albedo * L) - 1.0) > 0.2
 
 
 # ------------------------------------------------------------------------ out to other tools

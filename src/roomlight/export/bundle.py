@@ -226,4 +226,16 @@ def _add_photo(light: LightSource, folder: Path) -> None:
                     "intrinsics": k.intrinsics_dict(), "width": k.width,
                     "height": k.height}
     light.backplate = np.ascontiguousarray(case.image, np.float32)
-    light.metadata["photo_fit"] = {"method": fitted.method, "scale": float(t.scale)}
+    # The same light `roomlight insert` renders: its surface pushed behind the depth mesh wherever it ran
+    # through or in front of it, so the shadow catcher receives the light instead of sharing its place.
+    from roomlight.core.emitter.enclose import enclosing_depth
+
+    pts = t.points(geo.mesh.vertices)
+    pts = np.concatenate([pts, *[t.points(o.vertices) for o in geo.objects]]) if geo.objects else pts
+    depth, moved = enclosing_depth(light.depth, pts)
+    if moved > 0:
+        light.light = Light(light.light.radiance, depth, "mesh", light.light.frame)
+        v, f, uv = _mesh_from_panorama(light.light)
+        light.vertices, light.faces, light.uv = v, f.astype(np.int32), uv
+    light.metadata["photo_fit"] = {"method": fitted.method, "scale": float(t.scale),
+                                   "light_enclosing_scene": {"texels_moved": round(moved, 4)}}

@@ -11,8 +11,10 @@ labels ``truth/insert_mask.png`` and their description ``truth/insert.json``).
 
 **Scoring** (:func:`insertion_scores`): per new object, the composite against the truth in the
 object's *region*, its whole pixels dilated by its own projected radius (so the region covers the
-object and the shadow it casts next to it): PSNR LDR, SSIM and RMSE HDR of the region, and the
-object alone (its whole pixels): PSNR LDR and RMSE HDR, the shading error.
+object and the shadow it casts next to it): PSNR LDR, SSIM and RMSE HDR of the region; the object
+alone (its whole pixels): PSNR LDR and RMSE HDR, the shading error; and the *shadow*, the region
+without the object and its silhouette's ring (:func:`shadow_mask`): what the object does to the
+scene around it. The region mixes the two, and an error of one can hide in the other.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import numpy as np
 from roomlight.evaluation.photobench.objects import InsertedObject, ProbeSphere, draw_material
 
 __all__ = ["INSERT_SHAPES", "INSERT_LABEL0", "INSERT_IMAGE", "INSERT_MASK", "INSERT_JSON", "stage_inserts",
-           "render_insert_truth", "read_insert_truth", "insertion_scores", "region_mask"]
+           "render_insert_truth", "read_insert_truth", "insertion_scores", "region_mask", "shadow_mask"]
 
 #: Shapes of the inserted test objects.
 INSERT_SHAPES = ("blob", "knot", "torus", "sphere")
@@ -104,9 +106,22 @@ def region_mask(labels: np.ndarray, label: int) -> np.ndarray:
     return out
 
 
+def shadow_mask(labels: np.ndarray, label: int) -> np.ndarray:
+    """(H, W) bool: object ``label``'s region without the object: its whole pixels and the partly
+    covered ring around them (one pixel) left out, so what remains is only the scene the object
+    shades or lights (its shadow, its reflected light)."""
+    obj = labels == label
+    grown = obj.copy()
+    grown[1:] |= obj[:-1]
+    grown[:-1] |= obj[1:]
+    grown[:, 1:] |= grown[:, :-1].copy()
+    grown[:, :-1] |= grown[:, 1:].copy()
+    return region_mask(labels, label) & ~grown & ((labels == 0) | (labels == label))
+
+
 def insertion_scores(composite: np.ndarray, truth: np.ndarray, labels: np.ndarray, objects: list[InsertedObject],
                      camera_to_world) -> list[dict]:
-    """One record per new object: region and object scores (module docstring) and its distance (m)."""
+    """One record per new object: region, object and shadow scores (module docstring) and its distance (m)."""
     import torch
 
     from roomlight.evaluation.harness.metrics import LDR_GAMMA, score_view
@@ -127,6 +142,8 @@ def insertion_scores(composite: np.ndarray, truth: np.ndarray, labels: np.ndarra
         y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
         r = score_view(composite, truth, region)
         s = score_view(composite, truth, obj)
+        shade = shadow_mask(labels, o.label)
+        sh = score_view(composite, truth, shade) if shade.any() else {"psnr_ldr": float("nan"), "rmse_hdr": float("nan")}
         # SSIM over the region's bounding box (a 7 x 7 window, smaller for tiny regions)
         win = min(7, y1 - y0, x1 - x0)
         win = win if win % 2 else win - 1
@@ -136,7 +153,9 @@ def insertion_scores(composite: np.ndarray, truth: np.ndarray, labels: np.ndarra
                     "distance_m": float(np.linalg.norm(np.asarray(o.translate) - eye)),
                     "region_pixels": int(region.sum()), "object_pixels": int(obj.sum()),
                     "psnr_ldr": r["psnr_ldr"], "rmse_hdr": r["rmse_hdr"], "ssim": region_ssim,
-                    "object_psnr_ldr": s["psnr_ldr"], "object_rmse_hdr": s["rmse_hdr"]})
+                    "object_psnr_ldr": s["psnr_ldr"], "object_rmse_hdr": s["rmse_hdr"],
+                    "shadow_pixels": int(shade.sum()), "shadow_psnr_ldr": sh["psnr_ldr"],
+                    "shadow_rmse_hdr": sh["rmse_hdr"]})
     return out
 
 
@@ -157,7 +176,8 @@ def naive_light(case_dir, tau: float = 0.99):
 
 
 def composite_for_light(case_dir, light, materials: dict, objects: list[InsertedObject], camera, preset: str = "fast",
-                        overrides: dict | None = None, spp: int = 64, local_scene: bool = True) -> np.ndarray:
+                        overrides: dict | None = None, spp: int = 64, local_scene: bool = True, seed: int = 11,
+                        enclose: bool = True) -> np.ndarray:
     """The new objects composited into the photo under ``light`` (a :class:`~roomlight.core.light.Light` whose
     frame is light-from-camera) by ``roomlight insert``'s differential rendering, at the photo's size:
     (H, W, 3) float32 linear.
@@ -185,6 +205,6 @@ def composite_for_light(case_dir, light, materials: dict, objects: list[Inserted
         placed.append(PlacedObject(InsertSpec(o.shape, at_xyz=tuple(centre.tolist()), scale=2 * o.size[0]), v, f,
                                    o.material.bsdf(), centre, world_to_cam[:3, :3] @ np.array([0.0, 1.0, 0.0]),
                                    2 * float(o.size[0])))
-    res = composite_objects(fitted, placed, size=max(case.height, case.width), spp=spp, seed=11,
-                            local_scene=local_scene)
+    res = composite_objects(fitted, placed, size=max(case.height, case.width), spp=spp, seed=seed,
+                            local_scene=local_scene, enclose=enclose)
     return res.composite

@@ -71,7 +71,8 @@ def _luminance(x: np.ndarray) -> np.ndarray:
 class _LocalScene:
     """The photograph's depth mesh and fitted objects under the fitted light, in the room frame."""
 
-    def __init__(self, fitted: FittedPhoto, out_hw: tuple[int, int], max_depth: int, with_scene: bool = True):
+    def __init__(self, fitted: FittedPhoto, out_hw: tuple[int, int], max_depth: int, with_scene: bool = True,
+                 placed=(), enclose: bool = True):
         from roomlight.fitting.photo.geometry import build_geometry, working_size
         from roomlight.fitting.photo.masks import resize_nearest
         from roomlight.fitting.photo.scene import object_shapes, photo_sensor
@@ -97,6 +98,20 @@ class _LocalScene:
         self.intrinsics = case.intrinsics.scaled(ow, oh)
         self.sensor = photo_sensor(self.intrinsics, t)
         self.max_depth = int(max_depth)
+        # The light's surface, pushed out behind the local scene and the new objects where it runs
+        # through or in front of them (roomlight.core.emitter.enclose): the photograph's surfaces then
+        # receive the light instead of sharing its place.
+        self.depth, self.enclosed_share = fitted.depth, 0.0
+        if fitted.depth is not None and enclose:
+            import torch
+
+            from roomlight.core.emitter.enclose import enclosing_depth
+
+            pts = [self.background_vertices[np.unique(self.background_faces)]]
+            pts += [t.points(o.vertices) for o in geo.objects] if with_scene else []
+            pts += [t.points(p.vertices) for p in placed]
+            depth, self.enclosed_share = enclosing_depth(np.asarray(fitted.depth), np.concatenate(pts))
+            self.depth = torch.from_numpy(depth)
 
     def background(self, albedo: np.ndarray | None):
         """The depth mesh as a Mitsuba mesh, diffuse with ``albedo`` (H, W, 3) as a texture (None: white)."""
@@ -123,7 +138,7 @@ class _LocalScene:
             objects["local_scene"] = self.background(albedo)
         es = EmitterScene(f.kind, tuple(f.radiance.shape[:2]), objects=objects, sensor=self.sensor,
                           integrator={"type": "path", "max_depth": self.max_depth})
-        es.set_emitter(f.radiance if radiance is None else radiance, f.depth)
+        es.set_emitter(f.radiance if radiance is None else radiance, self.depth)
         return es.render(spp=spp, seed=seed).numpy().astype(np.float32)
 
 
@@ -260,7 +275,7 @@ def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512
 
 def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int = 512, spp: int = 256,
                       seed: int = 0, max_depth: int = 5, say=None, local_scene: bool = True,
-                      unseen_share: bool = False) -> InsertResult:
+                      unseen_share: bool = False, enclose: bool = True) -> InsertResult:
     """Composite objects already placed (camera frame) into the fitted photograph.
 
     ``local_scene=False`` renders the objects under the light alone, without the photograph's depth mesh
@@ -268,7 +283,9 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     baseline differential rendering improves on). ``unseen_share``: also render the objects under the
     light's texels the photograph does not show (:func:`seen_texels`) and record, per object, the share of
     its shading they give (``unseen_light_share`` in ``info["objects"]``): how much of its look rests on the
-    prior's guess of the room rather than on what the photograph showed.
+    prior's guess of the room rather than on what the photograph showed. ``enclose=False`` keeps a 2.5D
+    light's surface where it is, even through the local scene (:mod:`roomlight.core.emitter.enclose`:
+    for comparison only).
     """
     from roomlight.fitting.photo.geometry import resize_image, working_size
 
@@ -279,7 +296,7 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     timings = {}
 
     t1 = time.perf_counter()
-    local = _LocalScene(fitted, (oh, ow), max_depth, with_scene=local_scene)
+    local = _LocalScene(fitted, (oh, ow), max_depth, with_scene=local_scene, placed=placed, enclose=enclose)
     photo = resize_image(case.image, oh, ow)
     if local_scene:
         say(f"estimating the scene's albedo under the {fitted.method} light ({ow}x{oh}, {spp} spp)")
@@ -321,6 +338,8 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     info = {"light": fitted.method, "light_kind": fitted.kind, "local_scene": local_scene, "fit": str(fitted.folder),
             "size": [oh, ow],
             "spp": spp, "seed": seed, "max_depth": max_depth, "albedo_range": list(ALBEDO_RANGE),
+            "light_enclosing_scene": {"on": bool(enclose and fitted.depth is not None),
+                                      "texels_moved": round(local.enclosed_share, 4)},
             "coverage_rays": COVERAGE_RAYS ** 2, "objects": objects_info,
             "timings_s": {k: round(v, 3) for k, v in timings.items()}}
     return InsertResult(composite, photo, with_obj, without, cov, shadow, albedo, placed, info)

@@ -33,6 +33,7 @@ from roomlight.fitting.photo.config import PhotoFitConfig
 from roomlight.fitting.photo.frustum import FrustumTarget, frustum_terms
 from roomlight.fitting.photo.geometry import PhotoGeometry, SceneTransform, build_geometry, level_transform
 from roomlight.fitting.photo.materials import ObjectMaterials
+from roomlight.fitting.photo.room_albedo import RoomSurface, room_albedo_term
 
 __all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
 
@@ -102,9 +103,11 @@ class PhotoFitter(Fitter):
     """
 
     def __init__(self, model: PhotoModel, escene, target, mask, points, config: PhotoFitConfig,
-                 sensor_dict=None, window=None, frustum: FrustumTarget | None = None):
+                 sensor_dict=None, window=None, frustum: FrustumTarget | None = None,
+                 room: RoomSurface | None = None):
         super().__init__(model, escene, target, mask, points, config, sensor_dict=sensor_dict, window=window)
         self.frustum = frustum if frustum is not None and len(frustum) else None
+        self.room = room if room is not None and len(room) and config.room_albedo > 0 else None
 
     def terms(self, image, radiance, depth, mask):
         t = super().terms(image, radiance, depth, mask)
@@ -115,6 +118,10 @@ class PhotoFitter(Fitter):
             t["total"] = t["total"] + c.lambda_frustum * f["frustum"]
             if "frustum_depth" in f:
                 t["total"] = t["total"] + c.lambda_frustum_depth * f["frustum_depth"]
+        if self.room is not None:
+            t["room_albedo"] = room_albedo_term(radiance, depth, self.room, tuple(c.room_albedo_range),
+                                                c.room_albedo_trim, c.tau)
+            t["total"] = t["total"] + c.room_albedo * t["room_albedo"]
         return t
 
     def update(self) -> float:
@@ -299,7 +306,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     mask = torch.from_numpy(geometry.loss_mask)
     window = mask_window(mask) if config.crop_to_mask else None
     fitter = PhotoFitter(photo_model, escene, target, mask, points, config, sensor_dict=sensor, window=window,
-                         frustum=frustum)
+                         frustum=frustum, room=_room_surface(geometry, transform, config))
 
     out = Path(out_dir) if out_dir is not None else None
     state = None
@@ -327,6 +334,22 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     else:
         containment = {}
     return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info, containment)
+
+
+def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig) -> RoomSurface | None:
+    """The visible room points the albedo bound is checked at (room frame): a fixed random subset of the
+    frustum observations whose depth map gives a reliable normal."""
+    f = geometry.frustum
+    if config.room_albedo <= 0 or f.normals is None:
+        return None
+    idx = np.flatnonzero(f.normal_ok)
+    if len(idx) > config.room_albedo_points:
+        idx = np.sort(np.random.default_rng(config.seed).choice(idx, config.room_albedo_points, replace=False))
+    if not len(idx):
+        return None
+    # Lifted off the surface by 1 % of its distance, so the texels of its own wall do not sit on it.
+    pts = f.points[idx] + 0.01 * np.linalg.norm(f.points[idx], axis=-1, keepdims=True) * f.normals[idx]
+    return RoomSurface(transform.points(pts), transform.directions(f.normals[idx]), f.radiance[idx])
 
 
 def _containment_points(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig):

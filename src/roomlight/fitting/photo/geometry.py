@@ -21,6 +21,7 @@ from roomlight.errors import RoomlightError
 from roomlight.core.light import similarity_parts
 from roomlight.fitting.photo.camera import PhotoCamera, camera_rotation
 from roomlight.fitting.photo.masks import erode, resize_nearest
+from roomlight.fitting.photo.room_albedo import surface_normals
 from roomlight.fitting.photo.unproject import ImageMesh, ObjectMesh, image_mesh, object_mesh, unproject
 
 __all__ = ["SceneTransform", "FrustumSamples", "PhotoGeometry", "working_size", "resize_image", "build_geometry",
@@ -90,11 +91,15 @@ class FrustumSamples:
         points: (N, 3) the surfaces the pixels see, metres.
         rays: (N, 3) unit viewing directions of those pixels.
         radiance: (N, 3) their linear radiance in the photograph.
+        normals: (N, 3) the surfaces' unit normals facing the camera, from the depth map.
+        normal_ok: (N,) whether that normal is reliable (no depth edge next to the pixel).
     """
 
     points: np.ndarray
     rays: np.ndarray
     radiance: np.ndarray
+    normals: np.ndarray | None = None
+    normal_ok: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.points)
@@ -218,7 +223,9 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
     idx = np.flatnonzero(background)
     if len(idx) > config.frustum_pixels:
         idx = np.sort(rng.choice(idx, config.frustum_pixels, replace=False))
-    frustum = FrustumSamples(pts_r.reshape(-1, 3)[idx], rays_r.reshape(-1, 3)[idx], target.reshape(-1, 3)[idx])
+    normals_r, normal_ok = surface_normals(pts_r, config.edge_tolerance)
+    frustum = FrustumSamples(pts_r.reshape(-1, 3)[idx], rays_r.reshape(-1, 3)[idx], target.reshape(-1, 3)[idx],
+                             normals_r.reshape(-1, 3)[idx], normal_ok.reshape(-1)[idx])
 
     # --- repulsion points: the objects' surfaces and the empty space in front of everything
     per = config.repulsion_points

@@ -1,0 +1,198 @@
+"""The room's own surfaces bound the light: a visible wall is lit by the rest of the room.
+
+A photograph shows part of the room: its walls, floor and furniture, each at a radiance L_obs. Those
+surfaces are not (mostly) light sources: they reflect what the rest of the room sends them, so for a
+diffuse surface with albedo rho and irradiance E,
+
+    L_obs = rho * E / pi,   with rho between about 0.03 (black velvet, charcoal) and 0.9 (fresh snow,
+                            white paint),
+
+whatever the room. The 2.5D light *is* that room (its surface carries the radiance the photograph sees,
+and what the photograph does not see), so the irradiance it delivers to each visible surface point
+bounds it from both sides: a fitted light too dim makes the visible walls impossibly white
+(rho > 0.9), one too bright impossibly black (rho < 0.03). This is the fact that splits the brightness
+between the light and the albedos where the photograph's objects alone cannot, and it holds in any room
+(no typical albedo is assumed).
+
+The irradiance is a sum over the emitter's texels (the panorama pooled to a coarse grid), each a flat
+patch at its depth with the normal the depth map gives it:
+
+    E(q, n_q) = sum_j L_j max(0, n_q . d_j) D_j^2 dOmega_j |n_j . d_j| / (|n_j . w_j| r_j^2),
+
+where w_j is the texel's direction from the panorama's centre, D_j its depth, dOmega_j its solid angle,
+n_j its normal, d_j = (p_j - q) / r_j the direction from q to it. Visibility inside the room is not
+traced (the room is star-shaped from its centre, nearly convex from its walls). For an env map (no
+depth) the texels are at infinity: E = sum_j L_j max(0, n_q . w_j) dOmega_j. For a closed room of
+uniform radiance L, both give E = pi L at every point (tests/test_room_albedo.py checks it against that
+and against a ray-traced reference).
+
+Only the photograph's unsaturated pixels count (a saturated pixel is a lamp, a window or a sunlit patch
+whose radiance is unknown), and the few points that break the upper bound most are left out (a lamp
+shade, a screen, a point whose normal the depth map got wrong): a visible light source is allowed to
+be brighter than any reflector.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+
+from roomlight.core.geometry.equirect import pixel_directions, pixel_solid_angles
+
+__all__ = ["RoomSurface", "surface_normals", "irradiance", "room_albedo_term", "apparent_albedo", "POOLED_HEIGHT"]
+
+#: The emitter is pooled to this many rows (twice as many columns) before the irradiance sum: the
+#: irradiance is a smooth function of the light, and 32 x 64 texels keep the sum at a few ms.
+POOLED_HEIGHT = 32
+
+
+def surface_normals(points: np.ndarray, edge_tolerance: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals of a grid of camera-frame points, facing the camera.
+
+    Args:
+        points: (H, W, 3) the point each pixel sees (camera at the origin), metres.
+        edge_tolerance: a neighbour whose distance differs by more than this fraction marks a depth edge.
+    Returns:
+        ((H, W, 3) float64 normals, (H, W) bool: whether the normal is reliable (all four neighbours on
+        the same surface)).
+    """
+    p = np.asarray(points, dtype=np.float64)
+    h, w, _ = p.shape
+    du = np.zeros_like(p)
+    dv = np.zeros_like(p)
+    du[:, 1:-1] = p[:, 2:] - p[:, :-2]
+    dv[1:-1] = p[2:] - p[:-2]
+    n = np.cross(du, dv)
+    norm = np.linalg.norm(n, axis=-1, keepdims=True)
+    n = n / np.maximum(norm, 1e-12)
+    # Face the camera (the camera is at the origin, so towards -p).
+    flip = (n * p).sum(-1) > 0
+    n[flip] *= -1
+    dist = np.linalg.norm(p, axis=-1)
+    ok = np.zeros((h, w), dtype=bool)
+    ok[1:-1, 1:-1] = True
+    for dy, dx in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        nb = np.roll(dist, (dy, dx), axis=(0, 1))
+        ok &= np.abs(nb - dist) <= edge_tolerance * dist
+    ok &= norm[..., 0] > 0
+    return n, ok
+
+
+class RoomSurface:
+    """Visible room surfaces in the room frame, as tensors.
+
+    Args:
+        points: (N, 3) surface points (metres of the room).
+        normals: (N, 3) unit normals facing into the room.
+        radiance: (N, 3) the photograph's linear radiance there (saturation-clipped at 1).
+    """
+
+    def __init__(self, points, normals, radiance):
+        self.points = torch.as_tensor(points, dtype=torch.float32)
+        self.normals = torch.as_tensor(normals, dtype=torch.float32)
+        self.radiance = torch.as_tensor(radiance, dtype=torch.float32)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+
+def _pool(radiance: torch.Tensor, depth: torch.Tensor | None, height: int):
+    """Radiance (H, W, 3) and depth (H, W) pooled to ``height`` rows (solid-angle weighted)."""
+    h = radiance.shape[0]
+    if h <= height:
+        return radiance, depth
+    k = h // height
+    omega = pixel_solid_angles(h, 2 * h, dtype=radiance.dtype, device=radiance.device)[..., None]
+    pool = torch.nn.functional.avg_pool2d
+    wsum = pool(omega.permute(2, 0, 1)[None], k)
+    rad = pool((radiance * omega).permute(2, 0, 1)[None], k) / wsum
+    rad = rad[0].permute(1, 2, 0)
+    if depth is not None:
+        # The mean of D^2 (projected area), so the pooled patch keeps the area it stands for.
+        d2 = pool((depth[..., None].square() * omega).permute(2, 0, 1)[None], k) / wsum
+        depth = d2[0, 0].clamp_min(0).sqrt()
+    return rad, depth
+
+
+def irradiance(radiance: torch.Tensor, depth: torch.Tensor | None, points: torch.Tensor, normals: torch.Tensor,
+               pooled_height: int = POOLED_HEIGHT, min_cosine: float = 0.1) -> torch.Tensor:
+    """Irradiance an emitter delivers to surface points (module docstring), differentiable.
+
+    Args:
+        radiance: (H, W, 3) the emitter's linear radiance, W = 2 H.
+        depth: (H, W) its radial depth in metres, or None for an env map (texels at infinity).
+        points: (N, 3) receiving points in the emitter's frame (metres); unused for an env map.
+        normals: (N, 3) their unit normals.
+        pooled_height: rows of the texel grid summed over.
+        min_cosine: floor of |n_j . w_j|, bounding the area of texels seen at grazing angles.
+    Returns:
+        (N, 3) irradiance, radiance units times steradians.
+    """
+    rad, dep = _pool(radiance, depth, pooled_height)
+    h, w, _ = rad.shape
+    dev, dt = rad.device, rad.dtype
+    dirs = pixel_directions(h, w, dtype=dt, device=dev)             # (h, w, 3)
+    omega = pixel_solid_angles(h, w, dtype=dt, device=dev)          # (h, w)
+    normals = normals.to(dev, dt)
+    L = rad.reshape(-1, 3)
+    if dep is None:
+        cos_q = (normals @ dirs.reshape(-1, 3).T).clamp_min(0)      # (N, T)
+        return cos_q @ (L * omega.reshape(-1, 1))
+    pos = dirs * dep[..., None]                                     # (h, w, 3)
+    # Texel normals from the surface's tangents (columns wrap around, rows are clamped at the poles).
+    du = torch.roll(pos, -1, 1) - torch.roll(pos, 1, 1)
+    up = torch.cat([pos[:1], pos[:-1]], 0)
+    down = torch.cat([pos[1:], pos[-1:]], 0)
+    n = torch.cross(du, down - up, dim=-1)
+    n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    n = torch.where(((n * dirs).sum(-1, keepdim=True) > 0), -n, n)  # inward
+    cos_w = (n * dirs).sum(-1).abs().clamp_min(min_cosine)          # |n_j . w_j|
+    area = (dep.square() * omega / cos_w).reshape(-1)               # (T,) patch areas, m^2
+    pos, n = pos.reshape(-1, 3), n.reshape(-1, 3)
+    q = points.to(dev, dt)
+    diff = pos[None] - q[:, None]                                   # (N, T, 3)
+    r2 = diff.square().sum(-1)
+    # A texel never subtends more than the hemisphere; the floor keeps the one under q finite.
+    r2 = r2.clamp_min(area[None] / (2 * math.pi))
+    r = r2.sqrt()
+    d = diff / r[..., None]
+    cos_q = (d * normals[:, None]).sum(-1).clamp_min(0)
+    cos_j = (-(d * n[None])).sum(-1).clamp_min(0)
+    solid = (area[None] * cos_j / r2).clamp_max(2 * math.pi)
+    return (cos_q * solid) @ L
+
+
+def apparent_albedo(radiance: torch.Tensor, depth: torch.Tensor | None, surface: RoomSurface,
+                    eps: float = 1e-6) -> torch.Tensor:
+    """(N,) pi L_obs / E: the albedo each visible surface point would need under this light (means
+    over R, G, B)."""
+    e = irradiance(radiance, depth, surface.points, surface.normals).mean(-1)
+    return math.pi * surface.radiance.to(e.device).mean(-1) / (e + eps)
+
+
+def room_albedo_term(radiance: torch.Tensor, depth: torch.Tensor | None, surface: RoomSurface,
+                     albedo_range=(0.03, 0.9), trim: float = 0.1, tau: float = 0.99) -> torch.Tensor:
+    """Mean squared log-violation of ``albedo_range`` by the visible room's apparent albedos.
+
+    Args:
+        radiance, depth: the emitter (exposure applied), as in :func:`irradiance`.
+        surface: the visible room (room frame).
+        albedo_range: (lo, hi) the albedos real surfaces span.
+        trim: the share of points with the largest violations left out (visible light sources).
+        tau: a point whose photo pixel reaches tau in any channel is saturated and left out.
+    Returns:
+        scalar: mean over the kept points of max(0, log a - log hi)^2 + max(0, log lo - log a)^2.
+    """
+    keep = surface.radiance.amax(-1) < tau
+    if not bool(keep.any()):
+        return radiance.sum() * 0.0
+    sub = RoomSurface(surface.points[keep], surface.normals[keep], surface.radiance[keep])
+    log_a = torch.log(apparent_albedo(radiance, depth, sub).clamp_min(1e-12))
+    lo, hi = (math.log(float(a)) for a in albedo_range)
+    v = (log_a - hi).clamp_min(0).square() + (lo - log_a).clamp_min(0).square()
+    n_keep = len(v) - int(math.floor(trim * len(v)))
+    if n_keep < len(v):
+        v = torch.sort(v).values[:max(n_keep, 1)]
+    return v.mean()
