@@ -67,12 +67,13 @@ def main(argv=None) -> None:
         md += ["## The recovered materials", "",
                paired_markdown(pm, method, ["objects"], {k: f"Δ {k}" for k in MATERIAL_METRICS}, note=False)]
     if base_ins and other_ins:
-        from roomlight.evaluation.photobench.report import INSERT_LABELS, INSERT_METRICS
+        from roomlight.evaluation.photobench.report import INSERT_LABELS, insert_metrics
 
-        pi = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(INSERT_METRICS),
-                                higher_is_better=INSERT_METRICS)
+        metrics = insert_metrics(base_ins + other_ins)
+        pi = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(metrics),
+                                higher_is_better=metrics)
         md += ["", "## The inserted objects (paired per object)", "",
-               paired_markdown(pi, method, ["objects"], {k: f"Δ {v}" for k, v in INSERT_LABELS.items()}, note=False)]
+               paired_markdown(pi, method, ["objects"], {k: f"Δ {INSERT_LABELS[k]}" for k in metrics}, note=False)]
     text = "\n".join(md)
     print(text)
     if args.out:

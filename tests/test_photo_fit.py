@@ -83,8 +83,9 @@ def test_joint_fit_of_light_and_materials(photo, prior, tmp_path, one_torch_thre
     checks = [h["fixed_seed_loss"] for h in fit.result.history if "fixed_seed_loss" in h]
     assert fit.result.best_loss < checks[0]
     record = fit.result.history[1]
-    for term in ("img", "rep", "frustum", "frustum_depth", "z_prior", "albedo_prior"):
+    for term in ("img", "rep", "frustum", "frustum_depth", "z_prior", "room_albedo"):
         assert term in record and np.isfinite(record[term]), term
+    assert "albedo_prior" not in record  # the reflectance prior is off by default
     assert len(fit.fitter.points) == 2 * 64 + 64  # object points of both spheres + free-space points
     assert not torch.allclose(fit.materials.values(), torch.full_like(fit.materials.values(), 0.5))
     assert (tmp_path / "fit" / "history.jsonl").is_file()

@@ -731,3 +731,36 @@ def test_inserted_objects_have_their_truth_and_the_oracle_composites_them_better
     assert np.mean([s["psnr_ldr"] for s in s_oracle]) > np.mean([s["psnr_ldr"] for s in s_naive]) + 1.0
     # outside the objects the naive paste leaves the photo as it is
     np.testing.assert_allclose(naive[labels == 0][:50], np.maximum(photo[labels == 0][:50], 0), atol=1e-5)
+
+
+@pytest.mark.mitsuba
+def test_stratified_inserts_spread_over_distance_and_height_away_from_the_probes(tmp_path):
+    """--inserts-at stratified: one new object per stratum, the near one nearer than the middle one
+    nearer than the far one, the raised one above the floor, none on a probe's footprint, each visible."""
+    import json
+
+    from roomlight.evaluation.photobench.builder import make_photo_benchmark
+    from roomlight.evaluation.photobench.scoring import load_truth
+
+    cfg = TINY.override(inserts=4, insert_placement="stratified", seed=400100)
+    make_photo_benchmark(tmp_path / "b", cfg, progress=False)
+    d = tmp_path / "b" / "photo-00000"
+    info = json.loads((d / "truth" / "insert.json").read_text())
+    truth = load_truth(d)
+    strata = info["strata"]
+    objs = {o["id"]: o for o in info["objects"]}
+    assert list(strata.values())[:3] == ["near", "middle", "far"], strata
+    eye = truth.camera.origin
+    dist = {s: np.linalg.norm(np.asarray(objs[k]["translate"]) - eye) for k, s in strata.items()}
+    assert dist["near"] < dist["middle"] < dist["far"], dist
+    floor = min(o["translate"][1] for o in objs.values())
+    if "raised" in dist:
+        raised = next(k for k, s in strata.items() if s == "raised")
+        assert objs[raised]["translate"][1] > floor + 0.1
+    for o in objs.values():
+        for p in truth.probes:  # clear of every probe
+            gap = np.hypot(o["translate"][0] - p.center[0], o["translate"][2] - p.center[2])
+            assert gap > p.radius + o["size"][0], (o["id"], p.id)
+        assert info["pixels"][str(o["label"])] >= cfg.min_pixels
+    # the default keeps the original placement: at the probes, no strata recorded
+    assert PhotoBenchConfig().insert_placement == "probes"

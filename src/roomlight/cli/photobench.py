@@ -48,8 +48,12 @@ def _shard(text):
 @click.option("--probes", type=int, default=None,
               help=f"Probe positions per photo {default_of(PhotoBenchConfig, 'probes')}.")
 @click.option("--inserts", type=int, default=None,
-              help="New objects at the first probe positions, rendered into the room as the insertion truth "
+              help="New objects rendered into the room as the insertion truth "
                    f"{default_of(PhotoBenchConfig, 'inserts')}.")
+@click.option("--inserts-at", "inserts_at", type=click.Choice(["probes", "stratified"]), default=None,
+              help="Where the new objects go: at the first probe positions, where the reference light is "
+                   "captured around (probes), or one per stratum of the visible surfaces: near, middle and far "
+                   "by distance, and raised (a table, a shelf) (stratified; up to 4) [default: probes].")
 @click.option("--depth-noise", type=FINITE, default=None, metavar="SIGMA",
               help="Degrade the depth the methods get: depth x exp(SIGMA n), n a smooth unit-RMS random field "
                    "(the truth keeps the exact depth) [default: 0].")
@@ -61,8 +65,8 @@ def _shard(text):
                    "--set oracle_height=32 --set objects=[2,2] (repeatable).")
 @click.option("--overwrite", is_flag=True, help="Rebuild photos that are already built.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, fov, probes, inserts, depth_noise,
-                depth_scale, shard, sets, overwrite, quiet):
+def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, fov, probes, inserts, inserts_at,
+                depth_noise, depth_scale, shard, sets, overwrite, quiet):
     """Render the photo benchmark: photos of procedural rooms with inserted objects, and their truth.
 
     Each OUT/photo-NNNNN/ is a photo case (image.exr, depth.exr, mask.png, camera.json; what
@@ -76,7 +80,7 @@ def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, f
     cfg = suite_config(suite, n=n, seed=seed)
     height, width = res if res else (None, None)
     cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, fov=fov, probes=probes, inserts=inserts,
-                       depth_noise=depth_noise, depth_scale=depth_scale, **parse_sets(sets))
+                       insert_placement=inserts_at, depth_noise=depth_noise, depth_scale=depth_scale, **parse_sets(sets))
     result = make_photo_benchmark(out_dir, cfg, overwrite=overwrite, shard=_shard(shard), progress=not quiet,
                                   captured_lights=captured_lights)
     click.echo(f"make-photos: {len(result['built'])} built, {len(result['updated'])} with a new depth, "

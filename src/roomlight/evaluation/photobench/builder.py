@@ -222,8 +222,16 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=N
         noise_floor[m] = score_view(halves[0], halves[1], in_window)
     from roomlight.evaluation.photobench.insertion import render_insert_truth, stage_inserts
 
-    inserts = stage_inserts(st.probes, config.inserts, np.random.default_rng([config.seed, index, _SALT_INSERT]),
-                            config.metal_fraction, config.roughness, palette(config))
+    insert_rng = np.random.default_rng([config.seed, index, _SALT_INSERT])
+    strata = None
+    if config.insert_placement == "stratified":
+        from roomlight.evaluation.photobench.insertion import stage_stratified_inserts
+
+        occupied = [(np.asarray(p.center)[[0, 2]], float(p.radius)) for p in st.probes]
+        inserts, strata = stage_stratified_inserts(scenes, meshes, cam, config.inserts, insert_rng, occupied, config)
+    else:
+        inserts = stage_inserts(st.probes, config.inserts, insert_rng, config.metal_fraction, config.roughness,
+                                palette(config))
     if inserts:  # the photo's scene with the new objects, with the photo's seed: elsewhere the photo itself
         insert_image, insert_labels = render_insert_truth(scenes, meshes, inserts, cam, config.spp, seeds["photo"],
                                                           config.supersample, k)
@@ -268,6 +276,7 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=N
             fmt.write_png(tmp / fmt.TRUTH / ins.INSERT_MASK, insert_labels)
             fmt.write_json(tmp / fmt.TRUTH / ins.INSERT_JSON, {
                 "objects": [o.to_dict() for o in inserts], "image": ins.INSERT_IMAGE, "mask": ins.INSERT_MASK,
+                **({"strata": {o.id: s for o, s in zip(inserts, strata)}} if strata is not None else {}),
                 "pixels": {str(o.label): int((insert_labels == o.label).sum()) for o in inserts},
                 "note": "the photo's scene with these objects, same camera, seed and samples as the photo"})
         fmt.write_json(tmp / fmt.PROBES, {"probes": probes, "materials": list(PROBE_MATERIALS),

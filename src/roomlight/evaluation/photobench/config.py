@@ -9,14 +9,20 @@ from roomlight.core.color import MIDDLE_GREY
 from roomlight.core.config import StrictConfig
 from roomlight.errors import RoomlightError
 
-__all__ = ["PhotoBenchConfig", "DEPTH_FIELDS", "SUITES", "suite_config"]
+__all__ = ["PhotoBenchConfig", "DEPTH_FIELDS", "SUITES", "INSERT_PLACEMENTS", "INSERT_STRATA", "suite_config"]
 
 #: Settings that change only the depth file the methods get (``depth.exr``): a photo built with
 #: other values of these alone is updated in place instead of being rendered again.
 DEPTH_FIELDS = ("depth_noise", "depth_scale")
 #: The photo suites: the generator's own rooms and cameras, and the wide suite (photobench.variety).
 SUITES = ("rooms", "wide")
-_WIDE_DEFAULTS = {"suite": "rooms", "fov_range": None, "pitch_range": None, "captured_every": 0}
+_WIDE_DEFAULTS = {"suite": "rooms", "fov_range": None, "pitch_range": None, "captured_every": 0,
+                  "insert_placement": "probes"}
+#: Where the inserted objects go: at the probes (where the reference light is captured) or spread over the
+#: visible surfaces by distance (near, middle, far) and height (raised: a table top, a shelf).
+INSERT_PLACEMENTS = ("probes", "stratified")
+#: The strata of ``stratified`` placement, in the order objects are drawn for them.
+INSERT_STRATA = ("near", "middle", "far", "raised")
 
 
 @dataclass(frozen=True)
@@ -54,6 +60,7 @@ class PhotoBenchConfig(StrictConfig):
     fov_range: tuple[float, float] | None = None         #: a horizontal field of view drawn per photo (wide)
     pitch_range: tuple[float, float] | None = None       #: a camera pitch drawn per staging attempt (wide)
     captured_every: int = 0                              #: every k-th photo lit by a captured panorama (0: none)
+    insert_placement: str = "probes"                     #: where inserted objects go: probes or stratified
 
     def __post_init__(self):
         checks = [(self.n >= 1, "--n must be at least 1"),
@@ -67,7 +74,10 @@ class PhotoBenchConfig(StrictConfig):
                   # components would be renumbered: two objects keep the labels as written
                   (2 <= self.objects[0] <= self.objects[1], "objects must be an increasing range from 2"),
                   (self.probes >= 1, "probes must be at least 1"),
-                  (0 <= self.inserts <= self.probes, "inserts must be between 0 and the number of probes"),
+                  (self.insert_placement in INSERT_PLACEMENTS,
+                   f"insert_placement must be one of {', '.join(INSERT_PLACEMENTS)}"),
+                  (0 <= self.inserts <= (self.probes if self.insert_placement == "probes" else len(INSERT_STRATA)),
+                   "inserts must be between 0 and the number of probes (stratified: 0 to 4, one per stratum)"),
                   (0.0 < self.object_size[0] <= self.object_size[1] < 0.5, "object_size must be in (0, 0.5)"),
                   (0.0 < self.probe_size < 0.5, "probe_size must be in (0, 0.5)"),
                   (0.0 <= self.metal_fraction <= 1.0, "metal_fraction must be in [0, 1]"),

@@ -2,7 +2,9 @@
 recovered light composites them (``roomlight insert``'s differential rendering).
 
 **Building** (:func:`stage_inserts`, :func:`render_insert_truth`): each photo gets
-``config.inserts`` new objects at its first probe positions: a built-in shape (blob, knot, torus or
+``config.inserts`` new objects, at its first probe positions (``insert_placement = "probes"``, where the
+reference light is captured around) or spread over its visible surfaces by distance and height
+(``"stratified"``, :func:`stage_stratified_inserts`); a built-in shape (blob, knot, torus or
 sphere) of the probe's bounding radius, turned about the vertical, resting on the probe's support, with a
 principled material drawn like the photo's own objects. The truth is the photo's scene with them,
 path-traced from the photo's camera with the photo's seed and samples, so wherever the new objects
@@ -28,6 +30,7 @@ import numpy as np
 from roomlight.evaluation.photobench.objects import InsertedObject, ProbeSphere, draw_material
 
 __all__ = ["INSERT_SHAPES", "INSERT_LABEL0", "INSERT_IMAGE", "INSERT_MASK", "INSERT_JSON", "stage_inserts",
+           "stage_stratified_inserts",
            "render_insert_truth", "read_insert_truth", "insertion_scores", "region_mask", "shadow_mask"]
 
 #: Shapes of the inserted test objects.
@@ -53,6 +56,69 @@ def stage_inserts(probes: list[ProbeSphere], count: int, rng: np.random.Generato
         translate = (float(p.center[0]), float(support_y + _GAP - v[:, 1].min()), float(p.center[2]))
         out.append(InsertedObject(probe_obj.id, probe_obj.label, shape, probe_obj.size, yaw, translate, material))
     return out
+
+
+def stage_stratified_inserts(scenes, photo_meshes: dict, camera, count: int, rng: np.random.Generator,
+                             occupied: list[tuple[np.ndarray, float]], config) -> tuple[list[InsertedObject], list[str]]:
+    """``count`` new objects spread over the photo's visible horizontal surfaces, independently of the
+    probes: one per stratum of :data:`~roomlight.evaluation.photobench.config.INSERT_STRATA` while strata
+    last: the nearest, middle and farthest third of the resting points by distance from the camera, and
+    the raised ones (at least 15 cm above the lowest: a table top, a shelf). Each rests in a free column
+    (clear of the photo's objects and of ``occupied`` footprints: the probes'), is sized like a probe at
+    its distance and must show ``config.min_pixels`` whole, unoccluded pixels inside the frame.
+
+    Returns:
+        (the objects, the stratum of each).
+    """
+    from roomlight.core.render.raycast import RayCaster
+    from roomlight.evaluation.photobench.config import INSERT_STRATA
+    from roomlight.evaluation.photobench.staging import free_column, palette, support_points
+    from roomlight.evaluation.photobench.tracing import trace_coverage
+
+    caster = RayCaster(scenes.scene(photo_meshes))
+    supports = support_points(caster, camera, rows=48)
+    if not len(supports):
+        return [], []
+    dist = np.linalg.norm(supports - camera.origin, axis=1)
+    lo, hi = np.percentile(dist, [100 / 3, 200 / 3])
+    raised = supports[:, 1] > supports[:, 1].min() + 0.15
+    members = {"near": dist <= lo, "middle": (dist > lo) & (dist <= hi), "far": dist > hi, "raised": raised}
+    footprints = list(occupied)
+    out, strata = [], []
+    for stratum in INSERT_STRATA:
+        if len(out) == count:
+            break
+        pool = np.flatnonzero(members[stratum])
+        for _ in range(30 if len(pool) else 0):
+            p = supports[int(rng.choice(pool))]
+            d = float(np.linalg.norm(p - camera.origin))
+            radius = float(np.clip(config.probe_size * d, 0.03, 0.2))
+            k = len(out)
+            obj = InsertedObject(f"insert{k + 1}", INSERT_LABEL0 + k, INSERT_SHAPES[int(rng.integers(len(INSERT_SHAPES)))],
+                                 (radius,), float(rng.uniform(0.0, 360.0)), (0.0, 0.0, 0.0),
+                                 draw_material(rng, config.metal_fraction, tuple(config.roughness), palette(config)))
+            v, _ = obj.local_geometry()
+            rho = float(np.max(np.hypot(v[:, 0], v[:, 2])))
+            height = float(v[:, 1].max() - v[:, 1].min())
+            xz = p[[0, 2]]
+            if any(np.linalg.norm(xz - c) < rho + r + 0.03 for c, r in footprints):
+                continue
+            if not free_column(caster, xz, float(p[1]), rho, height):
+                continue
+            placed = InsertedObject(obj.id, obj.label, obj.shape, obj.size, obj.yaw,
+                                    (float(p[0]), float(p[1] + _GAP - v[:, 1].min()), float(p[2])), obj.material)
+            mesh = placed.mitsuba_mesh()
+            others = {o.id: o.mitsuba_mesh() for o in out}  # the ones placed before may hide it
+            cov = trace_coverage(scenes.scene({**photo_meshes, **others, obj.id: mesh}), camera, [mesh],
+                                 config.supersample)[0]
+            border = cov[0].any() or cov[-1].any() or cov[:, 0].any() or cov[:, -1].any()
+            if border or int((cov >= 1.0 - 1e-6).sum()) < config.min_pixels:
+                continue
+            out.append(placed)
+            strata.append(stratum)
+            footprints.append((xz, rho))
+            break
+    return out, strata
 
 
 def render_insert_truth(scenes, photo_meshes: dict, inserts: list[InsertedObject], camera, spp: int, seed: int,

@@ -321,9 +321,11 @@ def _index(out: Path, results, probes, mats, paired, paired_mat, timing, figures
 
 
 #: Scores of an inserted object (photobench.insertion) and whether higher is better.
-INSERT_METRICS = {"psnr_ldr": True, "ssim": True, "object_psnr_ldr": True, "rmse_hdr": False}
+#: (``shadow_psnr_ldr``: the region without the object; records made before it was scored lack it, and their
+#: reports keep their columns.)
+INSERT_METRICS = {"psnr_ldr": True, "ssim": True, "object_psnr_ldr": True, "shadow_psnr_ldr": True, "rmse_hdr": False}
 INSERT_LABELS = {"psnr_ldr": "region PSNR LDR ↑", "ssim": "region SSIM ↑", "object_psnr_ldr": "object PSNR LDR ↑",
-                 "rmse_hdr": "region RMSE HDR ↓"}
+                 "shadow_psnr_ldr": "shadow PSNR LDR ↑", "rmse_hdr": "region RMSE HDR ↓"}
 
 
 def insertion_records(results: list[dict]) -> list[dict]:
@@ -334,8 +336,16 @@ def insertion_records(results: list[dict]) -> list[dict]:
             if e.get("visible"):
                 out.append({"scene": f"{r['photo']}/{e['id']}", "material": "objects", "method": r["method"],
                             "distance_m": e["distance_m"],
-                            "metrics": {"insert": {k: e[k] for k in INSERT_METRICS}}})
+                            "metrics": {"insert": {k: e[k] for k in INSERT_METRICS if k in e}}})
     return out
+
+
+def insert_metrics(records: list[dict]) -> dict[str, bool]:
+    """The insertion scores every record has, in :data:`INSERT_METRICS` order."""
+    have = set(INSERT_METRICS)
+    for r in records:
+        have &= set(r["metrics"]["insert"])
+    return {k: v for k, v in INSERT_METRICS.items() if k in have}
 
 
 def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
@@ -349,8 +359,9 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
             by.setdefault(r["method"], {}).setdefault(k, []).append(float(v))
     methods = {m: {k: {"mean": float(np.nanmean(v)), "std": float(np.nanstd(v)), "n": len(v)} for k, v in d.items()}
                for m, d in by.items()}
-    paired = paired_differences(records, reference, "insert", exclude=(), metrics=tuple(INSERT_METRICS),
-                                higher_is_better=INSERT_METRICS)
+    metrics = insert_metrics(records)
+    paired = paired_differences(records, reference, "insert", exclude=(), metrics=tuple(metrics),
+                                higher_is_better=metrics)
     # distance: per object, prior - prior-envmap region PSNR against the distance
     table: dict[str, dict] = {}
     for r in records:
@@ -372,23 +383,24 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
                     "slope_ci95": [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))],
                     "near": {"mean": float(near.mean()), "ci95": list(bootstrap_mean_interval(near)), "n": len(near)},
                     "far": {"mean": float(far.mean()), "ci95": list(bootstrap_mean_interval(far)), "n": len(far)}}
-    return {"methods": methods, "paired": paired, "distance": distance}
+    return {"methods": methods, "paired": paired, "distance": distance, "metrics": list(metrics)}
 
 
 def _insertion_markdown(summary: dict | None, reference: str = "prior") -> list[str]:
     if not summary or not summary["methods"]:
         return []
+    labels = {k: INSERT_LABELS[k] for k in summary.get("metrics", INSERT_LABELS)}
     md = ["## Inserted objects (roomlight insert)", "",
           "Each photo's new objects composited under each recovered light by differential rendering (`naive-paste`: "
           "lit by a uniform light of the photo's mean colour, alone) against their path-traced truth in the room; "
           "the region is the object dilated by its projected radius, covering its shadow. Mean ± std over objects.", "",
-          "| Method | " + " | ".join(INSERT_LABELS.values()) + " | objects |",
-          "|---|" + ":---:|" * len(INSERT_LABELS) + "---:|"]
+          "| Method | " + " | ".join(labels.values()) + " | objects |",
+          "|---|" + ":---:|" * len(labels) + "---:|"]
     for m in ordered(summary["methods"], PHOTO_METHOD_ORDER):
         cells = [f"{summary['methods'][m][k]['mean']:.3f} ± {summary['methods'][m][k]['std']:.3f}" if k in ("ssim", "rmse_hdr")
-                 else f"{summary['methods'][m][k]['mean']:.2f} ± {summary['methods'][m][k]['std']:.2f}" for k in INSERT_LABELS]
+                 else f"{summary['methods'][m][k]['mean']:.2f} ± {summary['methods'][m][k]['std']:.2f}" for k in labels]
         md.append(f"| {m} | " + " | ".join(cells) + f" | {summary['methods'][m]['psnr_ldr']['n']} |")
-    md += ["", paired_markdown(summary["paired"], reference, ["objects"], {k: f"Δ {v}" for k, v in INSERT_LABELS.items()},
+    md += ["", paired_markdown(summary["paired"], reference, ["objects"], {k: f"Δ {v}" for k, v in labels.items()},
                                note=False)]
     d = summary.get("distance")
     if d:

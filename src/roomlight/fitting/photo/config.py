@@ -51,14 +51,15 @@ class PhotoFitConfig(FitConfig):
     init_samples: int = 16                #: N(0, I) draws; the one with the largest room starts the fit
     placement_steps: int = 200            #: steps placing the camera and objects inside the initial room
     checkpoint_every: int = 25            #: save the fit's state every this many iterations (0 = never)
-    albedo_prior: float = 0.3             #: weight of the log-normal reflectance prior on the objects' mean albedo (0 = off)
+    albedo_prior: float = 0.0             #: weight of the log-normal reflectance prior on the objects' mean albedo (0 = off)
     albedo_prior_mean: float = 0.3        #: the typical mean albedo over R, G, B that prior is centred on
     albedo_prior_average: str = "arithmetic"  #: which mean over R, G, B it holds: arithmetic or geometric (see docs/photo.md)
     albedo_range: tuple[float, float] = (0.0, 1.0)  #: the objects' albedo is held inside this range ((0.03, 0.9): real surfaces')
-    room_albedo: float = 0.0              #: weight of the visible room's albedo bound (fitting/photo/room_albedo.py; 0 = off)
+    room_albedo: float = 1.0              #: weight of the visible room's albedo bound (fitting/photo/room_albedo.py; 0 = off)
     room_albedo_range: tuple[float, float] = (0.03, 0.9)  #: the albedos the visible room's surfaces may have
     room_albedo_points: int = 512         #: visible room points the bound is checked at (a fixed random subset)
     room_albedo_trim: float = 0.1         #: share of those points breaking the bound most that are left out (lamps, screens)
+    room_albedo_moves: str = "light"      #: what the bound may move: the whole light, or its exposure (its brightness) only
     #: the white balance beside the exposure (FitConfig.white_balance) is off for photos: measured on the
     #: photo benchmark it raised the probes' colour error by 1.4-3.0 degrees and gained nothing
     #: (docs/results.md#white-balance); --set white_balance=true turns it on
@@ -92,6 +93,7 @@ class PhotoFitConfig(FitConfig):
             (len(self.room_albedo_range) == 2 and 0 < self.room_albedo_range[0] < self.room_albedo_range[1],
              "room_albedo_range must be [lo, hi] with 0 < lo < hi"),
             (0 <= self.room_albedo_trim < 1, "room_albedo_trim must be in [0, 1)"),
+            (self.room_albedo_moves in ("exposure", "light"), "room_albedo_moves must be exposure or light"),
             (len(self.albedo_range) == 2 and 0.0 <= self.albedo_range[0] < 0.5 < self.albedo_range[1] <= 1.0,
              "albedo_range must be [lo, hi] with 0 <= lo < 0.5 < hi <= 1 (the fit starts at 0.5)"),
         ]

@@ -119,7 +119,15 @@ class PhotoFitter(Fitter):
             if "frustum_depth" in f:
                 t["total"] = t["total"] + c.lambda_frustum_depth * f["frustum_depth"]
         if self.room is not None:
-            t["room_albedo"] = room_albedo_term(radiance, depth, self.room, tuple(c.room_albedo_range),
+            rad_r, depth_r = radiance, depth
+            if c.room_albedo_moves == "exposure":
+                # The bound says how bright the light is, not where its light comes from: its gradient
+                # reaches the light's level only (the exposure s; for a free map, its mean).
+                s = getattr(self.light.light_model, "s", None)
+                level = s if isinstance(s, torch.Tensor) else torch.log(radiance.mean())
+                rad_r = radiance.detach() * torch.exp(level - level.detach())
+                depth_r = None if depth is None else depth.detach()
+            t["room_albedo"] = room_albedo_term(rad_r, depth_r, self.room, tuple(c.room_albedo_range),
                                                 c.room_albedo_trim, c.tau)
             t["total"] = t["total"] + c.room_albedo * t["room_albedo"]
         return t
@@ -291,8 +299,9 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
 
     if materials is None:
         materials = ObjectMaterials(geometry.labels_present, albedo_range=tuple(config.albedo_range))
-    # The reflectance prior settles how the brightness splits between a free light and the albedos;
-    # under a light held fixed there is nothing to split, and the prior would only bias the albedos.
+    # The reflectance prior and the room's albedo bound settle how the brightness splits between a free
+    # light and the albedos; under a light held fixed there is nothing to split: the prior would only bias
+    # the albedos, the bound would be a constant.
     light_is_free = any(p.requires_grad for p in light.parameters())
     photo_model = PhotoModel(light, materials, config.albedo_prior if light_is_free else 0.0,
                              config.albedo_prior_mean, config.albedo_prior_average)
@@ -306,7 +315,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     mask = torch.from_numpy(geometry.loss_mask)
     window = mask_window(mask) if config.crop_to_mask else None
     fitter = PhotoFitter(photo_model, escene, target, mask, points, config, sensor_dict=sensor, window=window,
-                         frustum=frustum, room=_room_surface(geometry, transform, config))
+                         frustum=frustum, room=_room_surface(geometry, transform, config) if light_is_free else None)
 
     out = Path(out_dir) if out_dir is not None else None
     state = None
