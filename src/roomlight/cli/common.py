@@ -153,13 +153,14 @@ def fail(message: str) -> None:
     raise InputError(message)
 
 
-def load_prior(model, needed_by: str):
+def load_prior(model, needed_by: str, device: str | None = None):
     """The prior of ``--model MODEL`` (a model folder, a training run or the authors' run), or the
     bundled one when MODEL is None, on the device Mitsuba renders on so that decoded maps reach the
     renderer without copies.
 
     ``needed_by`` names what asked for it (``"--method prior"``): in the note printed to stderr when
     the bundled prior is taken, and in the error when there is no prior at all.
+    ``device`` overrides the renderer's device (a command that renders nothing need not load Mitsuba).
     Returns ``(model, path)``: the ``PanoVAE`` and the folder it was read from (for the records)."""
     if model is None:
         from roomlight.demo import bundled_prior_path
@@ -170,9 +171,12 @@ def load_prior(model, needed_by: str):
         click.echo(f"note: {needed_by} without --model: using the bundled prior ({model}), a small CPU-trained one; "
                    "pass --model RUN for your own", err=True)
     from roomlight.prior.model.runs import load_run_model
-    from roomlight.core.render.variant import torch_device
 
-    return load_run_model(model, device=torch_device()), str(Path(model).resolve())
+    if device is None:
+        from roomlight.core.render.variant import torch_device
+
+        device = torch_device()
+    return load_run_model(model, device=device), str(Path(model).resolve())
 
 
 def echo_run_summary(command: str, summary, out_dir) -> None:

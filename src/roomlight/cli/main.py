@@ -37,6 +37,7 @@ def cli(threads, deterministic):
       roomlight train-view-encoder --data DIR --out RUN   the photo fit's start, for a prior
       roomlight sample --model RUN --out DIR   draw rooms from the prior
       roomlight fit SCENE --method M --out DIR   recover illumination from an image
+      roomlight estimate PHOTO --out DIR    the light from any photograph, in seconds
       roomlight fit-photo IMAGE --out DIR   light + materials from one photograph
       roomlight insert FIT --object NAME --at X,Y --out c.png   objects into the fitted photograph
       roomlight bench make|run|report      the synthetic benchmark
@@ -52,11 +53,12 @@ def cli(threads, deterministic):
 
 
 def _register():
-    from roomlight.cli import (bench, convert, data, demo, emitter, eval_prior, experiment, export, fit, fit_pano,
-                               fit_photo, info, insert, prepare, render, sample, synth, train, train_view_encoder, view)
+    from roomlight.cli import (bench, convert, data, demo, emitter, estimate, eval_prior, experiment, export, fit,
+                               fit_pano, fit_photo, info, insert, prepare, render, sample, synth, train, train_view_encoder,
+                               view)
 
     for mod in (info, emitter, render, synth, prepare, data, train, train_view_encoder, fit_pano, eval_prior, sample, convert, fit,
-                fit_photo, insert, bench, demo, view, export, experiment):
+                estimate, fit_photo, insert, bench, demo, view, export, experiment):
         cli.add_command(mod.command)
 
 
