@@ -10,10 +10,10 @@ FIT=(--preset fast --eval-spp 64 --quiet)
 PAPER=(--set albedo_prior=0 --set room_albedo=0)   # the paper's objective: no reflectance prior, no room bound
 $R bench run-photos bench/wide24 --out results/wide24-defaults "${FIT[@]}" \
     --methods prior,prior-envmap,direct-envmap,oracle,oracle-envmap,naive-paste
-$R bench run-photos bench/wide24 --out results/wide24-paper "${FIT[@]}" --methods prior "${PAPER[@]}"
+$R bench run-photos bench/wide24 --out results/wide24-paper-objective "${FIT[@]}" --methods prior "${PAPER[@]}"
 $R bench run-photos bench/photos24 --out results/photos24-defaults "${FIT[@]}" \
     --methods prior,oracle,oracle-envmap,naive-paste
-$R bench run-photos bench/photos24 --out results/photos24-paper "${FIT[@]}" --methods prior "${PAPER[@]}"
+$R bench run-photos bench/photos24 --out results/photos24-paper-objective "${FIT[@]}" --methods prior "${PAPER[@]}"
 .venv/bin/python benchmarks/insertion_diagnosis.py bench/photos24 --photos 12 --out results/insertion-diagnosis.json \
     > results/insertion-diagnosis.md
 $R bench run-photos bench/photos24 --out results/photos24-defaults "${FIT[@]}" \

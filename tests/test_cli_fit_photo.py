@@ -138,10 +138,17 @@ def test_fit_photo_writes_every_output(tmp_path):
     rad, depth = bright_wall_room(16)
     make_tiny_photo(tmp_path / "case", rad, depth, size=(24, 32), spp=32, key=None)
     out = tmp_path / "out"
-    r = run(tmp_path / "case", "--out", out, "--preset", "fast", "--iterations", 2, "--spp", 2, "--quiet",
+    r = run(tmp_path / "case", "--out", out, "--iterations", 2, "--spp", 2, "--quiet",
             "--compare", "direct-envmap", "--set", "probe_count=2", "--set", "probe_spp=4",
             "--set", "probe_resolution=16", "--set", "init_samples=2", "--set", "placement_steps=10")
     assert r.exit_code == 0, r.output
+    # the default preset, auto, is fast where the renderer runs on a CPU
+    from roomlight.core.render.variant import torch_device
+    from roomlight.fitting.photo.config import PHOTO_PRESETS
+
+    took = "paper" if torch_device() == "cuda" else "fast"
+    assert f"--preset auto: {took}" in r.output
+    assert json.loads((out / "result.json").read_text())["settings"]["render_size"] == PHOTO_PRESETS[took].render_size
     for name in ("panorama.exr", "emitter/scene.xml", "emitter/emitter.ply", "materials.json", "render.png", "objects.ply",
                  "render.exr", "compare.png", "loss.png", "history.jsonl", "result.json", "probes.png", "probes.json",
                  "compare/direct-envmap/result.json", "compare/direct-envmap/emitter/envmap.exr"):

@@ -44,8 +44,9 @@ _BALANCED = PHOTO_PRESETS["balanced"]
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior for the prior methods: a model folder, a training run or the authors' run "
                    "[default: the prior bundled with roomlight].")
-@click.option("--preset", type=click.Choice(list(PHOTO_PRESETS)), default="paper", show_default=True,
-              help=f"paper: the paper's settings ({PhotoFitConfig.iterations} it, {PhotoFitConfig.spp} spp, "
+@click.option("--preset", type=click.Choice(["auto", *PHOTO_PRESETS]), default="auto", show_default=True,
+              help="auto: fast on a CPU, paper on a GPU (what the renderer runs on); "
+                   f"paper: the paper's settings ({PhotoFitConfig.iterations} it, {PhotoFitConfig.spp} spp, "
                    f"{PhotoFitConfig.render_size} px); fast: a few minutes on a laptop CPU ({_FAST.iterations} it, "
                    f"{_FAST.spp} spp, {_FAST.render_size} px); balanced: between them ({_BALANCED.iterations} it, "
                    f"{_BALANCED.spp} spp, {_BALANCED.render_size} px).")
@@ -85,6 +86,12 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     from roomlight.fitting.photo.config import photo_config
     from roomlight.fitting.photo.pipeline import run_photo
 
+    if preset == "auto":
+        from roomlight.core.render.variant import torch_device
+
+        preset = "paper" if torch_device() == "cuda" else "fast"
+        click.echo(f"note: --preset auto: {preset} (the renderer runs on the {'GPU' if preset == 'paper' else 'CPU'})",
+                   err=True)
     cfg = photo_config(preset, iterations=iterations, spp=spp, seed=seed, init=init, **parse_sets(sets))
     case = load_photo(image, depth=depth, depth_kind=depth_kind, mask=mask, normals=normals, fov=fov,
                       intrinsics=intrinsics, pitch=pitch, roll=roll, estimator=estimator,
