@@ -67,5 +67,5 @@ def test_which_methods_load_the_command_s_model():
 
 
 def test_an_unknown_name_gets_one_line_naming_the_known_ones():
-    with pytest.raises(RoomlightError, match=r"unknown method 'nope'; choose one of naive-paste, direct-envmap"):
+    with pytest.raises(RoomlightError, match=r"unknown method 'nope'; choose one of naive-paste, constant-colour, "):
         method("nope")

@@ -161,3 +161,9 @@ from roomlight.cli.photobench import make_photos, report_photos, run_photos  # n
 
 for _photo_command in (make_photos, run_photos, report_photos):
     command.add_command(_photo_command)
+
+# The crop benchmark's commands (the field's three-sphere protocol).
+from roomlight.cli.crops import make_crops, report_crops, run_crops  # noqa: E402
+
+for _crop_command in (make_crops, run_crops, report_crops):
+    command.add_command(_crop_command)

@@ -7,6 +7,8 @@ it runs, and how the report describes it. The registry's order is the row order 
 
 =================  ======================================================================
 ``naive-paste``    no light: the object rendered alone and pasted (photo benchmark's floor)
+``constant-colour`` a uniform light of the input view's mean colour (crop benchmark's floor)
+``mirrored-crop``  the input view mirrored and stretched around the sphere (crop benchmark)
 ``direct-envmap``  free log radiance as an env map, smoothness prior
 ``direct-sphere``  free log radiance on a sphere proxy enclosing all objects (+20 %)
 ``direct-al``      free log radiance + log depth, 2.5D area light, smoothness prior
@@ -17,6 +19,9 @@ it runs, and how the report describes it. The registry's order is the row order 
 ``prior-zero``     ``prior`` from z = 0, on photos
 ``prior-view``     ``prior`` from the view encoder's start, on photos
 ``prior``          z + log-exposure (+ white balance) through the 2.5D area light (the paper's method)
+``estimate``       ``roomlight estimate``: the view encoder's room from one image, no depth (crop benchmark)
+``estimate-refine`` the same, then fitted to the image's own pixels (``--refine``)
+``prior-mean``     the prior's mean room, z = 0: nothing from the image (a reference)
 ``prior-ceiling``  the prior's best latent for the whole true room (its capacity; a reference)
 ``oracle-envmap``  the true room's panorama shown at infinity (a reference)
 ``oracle``         the true room's panorama as a 2.5D area light (a reference)
@@ -30,12 +35,14 @@ from dataclasses import dataclass
 from roomlight.errors import RoomlightError
 
 __all__ = ["Method", "METHODS", "method", "methods_for", "default_run", "method_names", "method_order", "needs_prior",
-           "is_reference", "check_methods", "FIT", "PHOTO"]
+           "is_reference", "check_methods", "FIT", "PHOTO", "CROPS"]
 
 #: Where a method runs: ``roomlight fit`` / ``bench run`` (a scene description's view) ...
 FIT = "fit"
-#: ... and ``roomlight fit-photo`` / ``bench run-photos`` (a photograph).
+#: ... ``roomlight fit-photo`` / ``bench run-photos`` (a photograph) ...
 PHOTO = "photo"
+#: ... and ``bench run-crops`` (the field's protocol: one perspective crop of a panorama, no depth).
+CROPS = "crops"
 
 
 @dataclass(frozen=True)
@@ -47,12 +54,13 @@ class Method:
         light: the light it produces: ``mesh`` (2.5D area light), ``envmap`` (light at infinity),
             ``sphere`` (a sphere proxy around the objects), or None (no light: a compositing baseline).
         source: how it makes that light: ``latent`` (a trained model's latent fitted to the image),
-            ``pixels`` (free per-pixel maps fitted to the image), ``truth-latent`` (the model's latent
-            fitted to the true room: nothing from the image), ``truth`` (the true room itself), or
-            ``paste`` (no light at all).
+            ``pixels`` (free per-pixel maps fitted to the image, or the image's pixels rearranged),
+            ``truth-latent`` (the model's latent fitted to the true room: nothing from the image),
+            ``mean`` (the model's mean room: nothing from the image), ``truth`` (the true room itself),
+            or ``paste`` (no light at all).
         model: the model family it fits: ``prior`` (the panoramic VAE, ``--model``), ``veni`` or
             ``veni-d`` (loaded by name, ``--set veni_model=`` / ``veni_d_model=``), or None.
-        runs: where it runs (:data:`FIT`, :data:`PHOTO`).
+        runs: where it runs (:data:`FIT`, :data:`PHOTO`, :data:`CROPS`).
         default: whether a benchmark runs it when no ``--methods`` are given.
         init: for photo variants of ``prior``, the fixed start of the latent fit (``fit-photo --init``).
         text: one sentence for a report's reader.
@@ -98,11 +106,16 @@ class Method:
 _BOTH = frozenset({FIT, PHOTO})
 _FIT = frozenset({FIT})
 _PHOTO = frozenset({PHOTO})
+_CROPS = frozenset({CROPS})
 
 #: The registry, in table order.
 METHODS: tuple[Method, ...] = (
     Method("naive-paste", None, "paste", None, _PHOTO, True,
            "not a light: the object rendered under a uniform light and pasted over the photograph"),
+    Method("constant-colour", "envmap", "pixels", None, _CROPS, True,
+           "a uniform light of the input view's mean colour"),
+    Method("mirrored-crop", "envmap", "pixels", None, _CROPS, True,
+           "the input view stretched over the front half of the sphere and mirrored onto the back half"),
     Method("direct-envmap", "envmap", "pixels", None, _BOTH, True,
            "an env map (the light at infinity) optimised pixel by pixel with a smoothness term",
            ("Smoothness", "env map")),
@@ -130,6 +143,12 @@ METHODS: tuple[Method, ...] = (
     Method("prior", "mesh", "latent", "prior", _BOTH, True,
            "the learned prior's latent (and an exposure) optimised; its decoding is a 2.5D area light",
            ("roomlight prior", "2.5D AL")),
+    Method("estimate", "mesh", "latent", "prior", _CROPS, True,
+           "roomlight estimate: the prior's view encoder reads the image alone (no depth) and decodes its room"),
+    Method("estimate-refine", "mesh", "latent", "prior", _CROPS, True,
+           "roomlight estimate --refine: the same, then the room fitted to the image's own pixels"),
+    Method("prior-mean", "mesh", "mean", "prior", _CROPS, True,
+           "not a fit: the prior's mean room (z = 0), the same for every image"),
     Method("prior-ceiling", "mesh", "truth-latent", "prior", _PHOTO, True,
            "not a fit to the photograph: the prior's best latent for the whole true room (its capacity)"),
     Method("oracle-envmap", "envmap", "truth", None, _PHOTO, True,
@@ -150,7 +169,7 @@ def method(name: str) -> Method:
 
 
 def methods_for(where: str, *, fitted: bool | None = None, default: bool | None = None) -> tuple[str, ...]:
-    """Names of the methods that run in ``where`` (:data:`FIT` or :data:`PHOTO`), in table order.
+    """Names of the methods that run in ``where`` (:data:`FIT`, :data:`PHOTO` or :data:`CROPS`), in table order.
 
     ``fitted``: True keeps only methods fitted to the image, False only the references;
     ``default``: True keeps only those a benchmark runs without ``--methods``.
