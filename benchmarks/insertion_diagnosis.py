@@ -16,7 +16,7 @@ interval, and every score's noise floor beside it:
 - ``spp``: the composite's samples per pixel.
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
-         [--hi-spp 256] [--out FILE.json]
+         [--hi-spp 256] [--quick] [--out FILE.json]
 Resumable: each photo's records are kept in ``--out`` as they are made.
 """
 
@@ -79,21 +79,23 @@ def fitted_light(results: Path, photo: str, method: str):
     return light, materials
 
 
-def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int) -> list[dict]:
+def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False) -> list[dict]:
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import composite_for_light, insertion_scores, read_insert_truth
     from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
 
     truth = load_truth(case_dir)
     image, labels, objects = read_insert_truth(case_dir / fmt.TRUTH)
+    strata = json.loads((case_dir / fmt.TRUTH / "insert.json").read_text()).get("strata", {})
     true_mats = {k: m.to_dict() for k, m in truth.materials.items()}
     out = []
 
     def add(name: str, composite: np.ndarray, reference: np.ndarray = image):
         for r in insertion_scores(composite, reference, labels, objects, truth.camera.matrix):
             if r.get("visible"):
-                out.append({"photo": case_dir.name, "variant": name, **{k: r[k] for k in
-                            ("id", "distance_m", *SCORES, "region_pixels", "object_pixels", "shadow_pixels")}})
+                out.append({"photo": case_dir.name, "variant": name, "stratum": strata.get(r["id"]),
+                            **{k: r[k] for k in ("id", "distance_m", *SCORES, "region_pixels", "object_pixels",
+                                                 "shadow_pixels")}})
 
     again = truth_noise(case_dir)
     if again is not None:
@@ -107,9 +109,11 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int) -
                 lights[f"{method} ({res.name})"] = got
     for name, (light, mats) in lights.items():
         variants = [("", dict(enclose=True, spp=spp))]
-        if light.kind == "mesh":
+        if quick:
+            pass
+        elif light.kind == "mesh":
             variants.append((" unenclosed", dict(enclose=False, spp=spp)))
-        if name.startswith("oracle"):
+        if name.startswith("oracle") and not quick:
             variants += [(" seed 2", dict(enclose=True, spp=spp, seed=12)),
                          (f" {hi_spp} spp", dict(enclose=True, spp=hi_spp))]
         for suffix, kw in variants:
@@ -149,6 +153,51 @@ def table(records: list[dict]) -> str:
             p = paired(records, a, b, key)
             cells.append("–" if p is None else f"{p[0]:+.2f} [{p[1]:+.2f}, {p[2]:+.2f}] {p[3]}/{p[4]}")
         lines.append(f"| {a} − {b} | " + " | ".join(cells) + " |")
+    lines += ["", distance_table(records, [p for p in pairs if "unenclosed" not in p[0] + p[1]])]
+    return "\n".join(lines)
+
+
+def distance_table(records: list[dict], pairs, reps: int = 2000) -> str:
+    """The 2.5D light's advantage against distance: per pair, a − b on region, object and shadow PSNR by
+    stratum (or by distance tercile when the objects have none), and the slope over distance with a 95 %
+    bootstrap interval over objects."""
+    lines = ["| pair | score | " + " | ".join(("near", "middle", "far", "raised")) + " | slope (dB/m) |",
+             "|---|---|" + ":---:|" * 5]
+    for a, b in pairs:
+        ka = {(r["photo"], r["id"]): r for r in records if r["variant"] == a}
+        kb = {(r["photo"], r["id"]): r for r in records if r["variant"] == b}
+        keys = [k for k in ka if k in kb]
+        if len(keys) < 4:
+            continue
+        dist = np.array([ka[k]["distance_m"] for k in keys])
+        strata = [ka[k].get("stratum") for k in keys]
+        if not any(strata):
+            t1, t2 = np.percentile(dist, [100 / 3, 200 / 3])
+            strata = ["near" if d <= t1 else "middle" if d <= t2 else "far" for d in dist]
+        for key in SCORES:
+            diff = np.array([ka[k][key] - kb[k][key] for k in keys])
+            ok = np.isfinite(diff)
+            cells = []
+            for s in ("near", "middle", "far", "raised"):
+                sel = ok & np.array([x == s for x in strata])
+                if sel.sum() >= 2:
+                    d = diff[sel]
+                    rng = np.random.default_rng(0)
+                    boot = d[rng.integers(0, len(d), (reps, len(d)))].mean(1)
+                    cells.append(f"{d.mean():+.2f} [{np.percentile(boot, 2.5):+.2f}, {np.percentile(boot, 97.5):+.2f}] "
+                                 f"n={len(d)}")
+                else:
+                    cells.append("–")
+            x, y = dist[ok], diff[ok]
+            slope = float(np.polyfit(x, y, 1)[0])
+            rng = np.random.default_rng(0)
+            boots = []
+            for _ in range(reps):
+                i = rng.integers(0, len(x), len(x))
+                if np.ptp(x[i]) > 0:
+                    boots.append(np.polyfit(x[i], y[i], 1)[0])
+            cells.append(f"{slope:+.2f} [{np.percentile(boots, 2.5):+.2f}, {np.percentile(boots, 97.5):+.2f}]")
+            lines.append(f"| {a} − {b} | {key} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -160,6 +209,7 @@ def main(argv=None) -> None:
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--hi-spp", type=int, default=256)
     ap.add_argument("--out", type=Path, default=Path("results/insertion-diagnosis.json"))
+    ap.add_argument("--quick", action="store_true", help="each light once: no unenclosed, other-seed or more-samples variant")
     args = ap.parse_args(argv)
     photos = sorted(p for p in args.bench.glob("photo-*") if p.is_dir())
     photos = photos[:args.photos] if args.photos else photos
@@ -169,7 +219,7 @@ def main(argv=None) -> None:
         if d.name in done:
             continue
         print(f"[{k + 1}/{len(photos)}] {d.name}", file=sys.stderr, flush=True)
-        done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp)
+        done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick)
         tmp = args.out.with_suffix(".tmp")
         tmp.write_text(json.dumps(done))
         tmp.replace(args.out)

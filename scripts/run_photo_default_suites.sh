@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Both photo suites under today's photo-fit defaults, against the paper's objective, paired per photo
-# (docs/results.md, "The wide photo suite" and "The photo benchmark"). One heavy job at a time;
-# resumable: rerun to continue. Needs bench/photos24 and bench/wide24 (scripts/run_wide_suite.sh and the
-# make-photos command in docs/results.md).
+# (docs/results.md, "The wide photo suite" and "The photo benchmark"), then the inserted objects' study
+# (scripts/run_insertion_study.sh). One heavy job at a time; resumable: rerun to continue. Needs
+# bench/photos24 and bench/wide24 (scripts/run_wide_suite.sh and the make-photos command in docs/results.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 R=.venv/bin/roomlight
@@ -12,9 +12,10 @@ $R bench run-photos bench/wide24 --out results/wide24-defaults "${FIT[@]}" \
     --methods prior,prior-envmap,direct-envmap,oracle,oracle-envmap,naive-paste
 $R bench run-photos bench/wide24 --out results/wide24-paper-objective "${FIT[@]}" --methods prior "${PAPER[@]}"
 $R bench run-photos bench/photos24 --out results/photos24-defaults "${FIT[@]}" \
-    --methods prior,oracle,oracle-envmap,naive-paste
+    --methods prior,prior-envmap,oracle,oracle-envmap,naive-paste
 $R bench run-photos bench/photos24 --out results/photos24-paper-objective "${FIT[@]}" --methods prior "${PAPER[@]}"
-.venv/bin/python benchmarks/insertion_diagnosis.py bench/photos24 --photos 12 --out results/insertion-diagnosis.json \
+.venv/bin/python benchmarks/insertion_diagnosis.py bench/photos24 --photos 8 --out results/insertion-diagnosis.json \
     > results/insertion-diagnosis.md
+scripts/run_insertion_study.sh
 $R bench run-photos bench/photos24 --out results/photos24-defaults "${FIT[@]}" \
     --methods prior,prior-envmap,direct-envmap,oracle,oracle-envmap,naive-paste

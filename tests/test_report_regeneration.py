@@ -29,3 +29,13 @@ def test_a_committed_report_is_rebuilt_byte_for_byte(folder, command, tmp_path):
     assert r.exit_code == 0, r.output
     rebuilt = (work / "report" / "report.md").read_bytes()
     assert rebuilt == (src / "report.md").read_bytes(), f"{folder}: the rebuilt report differs from the committed one"
+
+
+@pytest.mark.parametrize("folder", ["crops-rooms", "crops-blender"])
+def test_a_committed_crop_report_is_rebuilt_byte_for_byte(folder, tmp_path):
+    work = tmp_path / folder
+    shutil.copytree(RESULTS / folder, work)
+    (work / "report.md").unlink()
+    r = CliRunner().invoke(cli, ["bench", "report-crops", str(work)], catch_exceptions=False)
+    assert r.exit_code == 0, r.output
+    assert (work / "report.md").read_bytes() == (RESULTS / folder / "report.md").read_bytes()
