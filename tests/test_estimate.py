@@ -115,3 +115,41 @@ def test_the_light_in_the_photographs_directions_matches_its_pixels_and_refine_b
     assert refined.info["refine"]["loss_final"] < refined.info["refine"]["loss_first"]
     assert log_error(refined) < log_error(plain)
     assert log_error(refined) < 0.35  # within 40 % of the photograph's radiance on the median pixel
+
+
+def test_a_known_depth_replaces_the_guess_and_sets_the_room_s_size(tmp_path):
+    """In a room twice the guess's size, the decoded room in the photograph's directions is about the guess's
+    size without --depth and the true size with it."""
+    from helpers_photo import bright_wall_room, make_tiny_photo
+
+    from roomlight.core.geometry.equirect import sample_equirect
+    from roomlight.demo import bundled_prior_path
+    from roomlight.fitting.photo.case import load_photo
+    from roomlight.fitting.photo.estimate import _rays_room, estimate_light
+    from roomlight.fitting.photo.unproject import radial_distance
+    from roomlight.prior.model.runs import load_run_model
+
+    rad, depth = bright_wall_room(16)
+    make_tiny_photo(tmp_path / "big", rad, depth * 2.0, size=(48, 64), spp=16, pitch=-10.0)
+    case = load_photo(str(tmp_path / "big"))
+    model = load_run_model(bundled_prior_path(), device="cpu")
+    true_r = radial_distance(case.depth, case.intrinsics, case.depth_kind)
+    rays = torch.from_numpy(_rays_room(case.intrinsics, case.pitch_deg, 0.0).reshape(-1, 3)).float()
+
+    def size_error(given):
+        est = estimate_light(np.minimum(case.image, 1.0), case.intrinsics, model, case.pitch_deg, depth=given)
+        seen = sample_equirect(torch.as_tensor(est.light.depth)[None, None], rays)[0, 0].numpy().reshape(true_r.shape)
+        return float(np.median(np.abs(np.log(seen / true_r))))
+
+    guessed, given = size_error(None), size_error(true_r.astype(np.float32))
+    assert guessed > 0.4          # the guess (3.5 m) against a 6 m room
+    assert given < 0.15 < guessed
+    # and from the command line, one line for a depth of the wrong size
+    np.save(tmp_path / "small.npy", np.ones((4, 4), np.float32))
+    from roomlight.core.color import linear_to_srgb
+
+    png = tmp_path / "big.png"
+    Image.fromarray(np.rint(linear_to_srgb(np.clip(case.image, 0, 1)) * 255).astype(np.uint8)).save(png)
+    r = CliRunner().invoke(cli, ["estimate", str(png), "--fov", "70", "--depth", str(tmp_path / "small.npy"),
+                                 "--out", str(tmp_path / "e")])
+    assert r.exit_code != 0 and "depth is 4x4" in r.output and "Traceback" not in r.output, r.output

@@ -16,6 +16,11 @@ from roomlight.cli.common import FINITE, load_prior
               help="Camera tilt, positive looking up.")
 @click.option("--roll", type=FINITE, default=0.0, show_default=True, metavar="DEG",
               help="Camera roll about its view axis.")
+@click.option("--depth", type=click.Path(), default=None,
+              help="The photograph's depth when you have one (.npy/.exr/.png as for fit-photo; metres), instead "
+                   "of the guess.")
+@click.option("--depth-kind", type=click.Choice(["z", "radial"]), default="z", show_default=True,
+              help="What --depth holds: distance along the optical axis or from the camera centre.")
 @click.option("--model", type=click.Path(), default=None,
               help="A prior with a view encoder (a model folder or training run) [default: the bundled prior].")
 @click.option("--refine", is_flag=True,
@@ -23,7 +28,7 @@ from roomlight.cli.common import FINITE, load_prior
 @click.option("--steps", type=click.IntRange(min=1), default=40, show_default=True,
               help="Steps of --refine.")
 @click.option("--quiet", is_flag=True, help="Only errors and notes.")
-def command(photo, out_dir, fov, pitch, roll, model, refine, steps, quiet):
+def command(photo, out_dir, fov, pitch, roll, depth, depth_kind, model, refine, steps, quiet):
     """Recover the room's light from PHOTO alone: a JPEG, PNG or linear EXR; no depth, no mask.
 
     The field of view comes from the EXIF focal length when the file has one (else --fov, else
@@ -53,8 +58,20 @@ def command(photo, out_dir, fov, pitch, roll, model, refine, steps, quiet):
     image, camera, about = read_photo_for_estimate(photo, fov)
     for note in about.pop("notes"):
         click.echo(f"note: {note}", err=True)
+    radial = None
+    if depth is not None:
+        from roomlight.errors import InputFileError
+        from roomlight.fitting.photo.case import read_photo_depth
+        from roomlight.fitting.photo.unproject import radial_distance
+
+        d = read_photo_depth(depth)
+        if d.shape != image.shape[:2]:
+            raise InputFileError(depth, f"depth is {d.shape[1]}x{d.shape[0]} but the photograph is "
+                                        f"{image.shape[1]}x{image.shape[0]}")
+        radial = radial_distance(d, camera, depth_kind).astype(np.float32)
     prior, model_path = load_prior(model, "estimate", device="cuda" if torch.cuda.is_available() else "cpu")
-    est = estimate_light(np.minimum(image, 1.0), camera, prior, pitch, roll, refine_steps=steps if refine else 0)
+    est = estimate_light(np.minimum(image, 1.0), camera, prior, pitch, roll, refine_steps=steps if refine else 0,
+                         depth=radial)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rad, depth = est.light.to_numpy()

@@ -128,7 +128,8 @@ def _rays_room(camera, pitch: float, roll: float) -> np.ndarray:
 
 
 def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: float = 0.0, refine_steps: int = 0,
-                   refine_lr: float = 0.05, refine_pixels: int = 4096, tau: float = 0.99, seed: int = 0) -> Estimate:
+                   refine_lr: float = 0.05, refine_pixels: int = 4096, tau: float = 0.99, seed: int = 0,
+                   depth: np.ndarray | None = None) -> Estimate:
     """The light of one photograph (module docstring).
 
     Args:
@@ -137,6 +138,7 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
         model: a prior with a view encoder (a ``PanoVAE``).
         pitch, roll: the camera's orientation in degrees (level: 0, 0).
         refine_steps: steps of the fit to the photograph's pixels (0: none).
+        depth: (H, W) the photograph's radial depth in metres when known: it replaces the guess.
     """
     from roomlight.core.light import Light
     from roomlight.fitting.photo.camera import camera_rotation
@@ -150,12 +152,14 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     rays = _rays_room(camera, pitch, roll)
-    depth = first_depth_guess(rays)
+    guessed = depth is None
+    depth = first_depth_guess(rays) if guessed else np.asarray(depth, np.float32)
     dev = next(model.parameters()).device
     with torch.no_grad():
         z, log_exposure, about = view_latent(model, _case(image, camera, depth, pitch, roll))
     timings["view_encoder"] = time.perf_counter() - t0
-    info: dict = {"depth_guess": {"eye_height_m": EYE_HEIGHT, "distance_m": GUESS_DISTANCE},
+    info: dict = {"depth": {"guess": {"eye_height_m": EYE_HEIGHT, "distance_m": GUESS_DISTANCE}} if guessed
+                  else {"given": True, "median_m": round(float(np.median(depth)), 4)},
                   "seen_fraction": about["seen_fraction"], "view_log_exposure": round(log_exposure, 4)}
     if refine_steps > 0:
         t1 = time.perf_counter()
