@@ -24,7 +24,8 @@ _BALANCED = PHOTO_PRESETS["balanced"]
                    "centre [default: z, or the photo case's camera.json].")
 @click.option("--mask", type=click.Path(), default=None,
               help="The objects of interest: a binary mask (each connected component is an object) or integer "
-                   "labels (each value is an object), IMAGE's size.")
+                   "labels (each value is an object), IMAGE's size [default: the photo case's mask, else none: "
+                   "the light is fitted to the visible room alone].")
 @click.option("--normals", type=click.Path(), default=None,
               help="Per-pixel unit normals (.npy or .exr, camera frame: x right, y up, z towards the viewer) "
                    "[default: from the depth mesh].")

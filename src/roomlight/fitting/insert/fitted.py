@@ -120,18 +120,20 @@ def load_fitted_photo(folder, light: str | None = None) -> FittedPhoto:
         result = main
     inputs = result.get("inputs", {})
     cam = result.get("camera", {})
-    missing = [role for role in ("image", "depth", "mask") if not inputs.get(role)]
+    # A fit without objects (no mask) has no mask file to read again.
+    roles = ("image", "depth", "mask") if result.get("objects", [None]) else ("image", "depth")
+    missing = [role for role in roles if not inputs.get(role)]
     if missing:
         raise InputFileError(root / "result.json", f"records no {' / '.join(missing)} file: insertion needs the "
                                                    "photograph, its depth and its mask as files",
                              "fit the photograph again with this version of roomlight")
-    for role in ("image", "depth", "mask"):
+    for role in roles:
         if not Path(inputs[role]).is_file():
             raise InputFileError(inputs[role], f"the fit's {role} file is gone (moved or deleted since the fit)")
     h, w = cam["input_size"]
     k = cam["intrinsics_input"]
     intr = PhotoCamera(int(w), int(h), float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]))
-    case = load_photo(inputs["image"], depth=inputs["depth"], depth_kind=cam.get("depth_kind"), mask=inputs["mask"],
+    case = load_photo(inputs["image"], depth=inputs["depth"], depth_kind=cam.get("depth_kind"), mask=inputs.get("mask"),
                       normals=inputs.get("normals"), intrinsics=intr, pitch=float(cam.get("pitch_deg", 0.0)),
                       roll=float(cam.get("roll_deg", 0.0)))
     config = PhotoFitConfig.from_dict(result.get("settings", {}), where=str(root / "result.json"))

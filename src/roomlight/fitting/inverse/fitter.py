@@ -129,7 +129,10 @@ class Fitter:
                  window: tuple[int, int, int, int] | None = None):
         self.light, self.escene, self.config = light, escene, config
         self.full_target, self.full_mask = target.float(), mask.bool()
-        if int(self.full_mask.sum()) == 0:
+        # Without a pixel to match, a fit renders nothing; it is left to terms a subclass adds (a photo
+        # without objects: the light seen through its pixels).
+        self.renders = bool(self.full_mask.any())
+        if not self.renders and not self.fits_without_pixels():
             raise RoomlightError("fit: the mask selects no pixel of the target image")
         self.window = window
         if window is None:
@@ -148,10 +151,19 @@ class Fitter:
         self.optimizer = torch.optim.Adam(params, lr=config.lr, betas=tuple(config.betas))
         self.generator = torch.Generator().manual_seed(config.seed)
 
+    def fits_without_pixels(self) -> bool:
+        """Whether the objective has terms beyond the image's (so an empty mask still fits something)."""
+        return False
+
     # ------------------------------------------------------------------ objective
-    def terms(self, image: torch.Tensor, radiance, depth, mask) -> dict[str, torch.Tensor]:
+    def terms(self, image: torch.Tensor | None, radiance, depth, mask) -> dict[str, torch.Tensor]:
+        """Every term of the objective and their weighted ``total``; ``image`` None (nothing rendered,
+        see ``renders``) makes the image term zero."""
         c = self.config
-        t = image_loss(image, self.target, mask, c.tau, c.c_max, c.lambda_log, c.log_eps)
+        if image is None:
+            t = {"img": torch.zeros((), dtype=radiance.dtype, device=radiance.device)}
+        else:
+            t = image_loss(image, self.target, mask, c.tau, c.c_max, c.lambda_log, c.log_eps)
         if self.points is not None and depth is not None:
             t["rep"] = repulsion_penalty(depth, self.points, c.margin)
             t["total"] = t["img"] + c.lambda_rep * t["rep"]
@@ -175,9 +187,11 @@ class Fitter:
         c = self.config
         with torch.no_grad():
             rad, depth = self.light.emitter()
-            self.escene.set_emitter(rad, depth)
-            self.escene.set_parameters(self.light.scene_values())
-            img = self.escene.render(spp=c.eval_spp or c.spp, seed=c.seed + EVAL_SEED_OFFSET, sensor=self.sensor)
+            img = None
+            if self.renders:
+                self.escene.set_emitter(rad, depth)
+                self.escene.set_parameters(self.light.scene_values())
+                img = self.escene.render(spp=c.eval_spp or c.spp, seed=c.seed + EVAL_SEED_OFFSET, sensor=self.sensor)
             return {k: float(v) for k, v in self.terms(img, rad, depth, self.mask).items()}
 
     def evaluate(self) -> float:
@@ -207,8 +221,10 @@ class Fitter:
         self.optimizer.zero_grad(set_to_none=True)
         rad, depth = self.light.emitter()
         seed = c.seed + 2 * it
-        img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1,
-                                    sensor=self.sensor, extra=self.light.scene_values())
+        img = None
+        if self.renders:
+            img = render_differentiable(self.escene, rad, depth, spp=c.spp, seed=seed, seed_grad=seed + 1,
+                                        sensor=self.sensor, extra=self.light.scene_values())
         terms = self.terms(img, rad, depth, self._mask_subset())
         loss = terms["total"]
         ok = bool(torch.isfinite(loss))

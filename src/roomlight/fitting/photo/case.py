@@ -250,7 +250,8 @@ def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, n
         image: an image file, or a photo case folder.
         depth: a depth file; without one (and no folder depth) ``estimator`` is run on the image.
         depth_kind: ``z`` or ``radial`` (default: the folder's camera.json, else ``z``).
-        mask: the objects of interest (required, here or in the folder).
+        mask: the objects of interest (here or in the folder); without one the case has no objects and
+            only the visible room constrains the light.
         normals: an optional per-pixel normals file.
         fov: horizontal field of view in degrees, or ``intrinsics`` ``"fx,fy,cx,cy"`` (pixels).
         pitch, roll: camera orientation in degrees (default: camera.json, else level).
@@ -330,13 +331,17 @@ def load_photo(image, *, depth=None, depth_kind: str | None = None, mask=None, n
         K = K.scaled(w, h)
 
     if mask is None:
-        raise RoomlightError(f"{image_path}: no mask of the objects of interest: pass --mask FILE (binary or "
-                             "integer labels, the image's size)")
-    raw = read_mask_array(mask)
-    _check_size(mask, "mask", raw.shape, image_path, img.shape)
-    labels = labels_from_array(raw, min_object_fraction, where=str(mask))
-    files["mask"] = str(mask)
-    notes.extend(labels.notes)
+        # Without objects the photograph's own visible room still constrains the light: the frustum term
+        # (the light seen through the photo's pixels) and the room's albedo bound.
+        labels = ObjectLabels(np.zeros((h, w), np.int32), "none", [])
+        notes.append("no mask: no objects of interest, so the light is fitted to the visible room alone "
+                     "(pass --mask FILE to fit objects' materials too)")
+    else:
+        raw = read_mask_array(mask)
+        _check_size(mask, "mask", raw.shape, image_path, img.shape)
+        labels = labels_from_array(raw, min_object_fraction, where=str(mask))
+        files["mask"] = str(mask)
+        notes.extend(labels.notes)
     if normals is not None:
         normal_map = read_normals(normals)
         _check_size(normals, "normal map", normal_map.shape, image_path, img.shape)

@@ -105,9 +105,13 @@ class PhotoFitter(Fitter):
     def __init__(self, model: PhotoModel, escene, target, mask, points, config: PhotoFitConfig,
                  sensor_dict=None, window=None, frustum: FrustumTarget | None = None,
                  room: RoomSurface | None = None):
-        super().__init__(model, escene, target, mask, points, config, sensor_dict=sensor_dict, window=window)
         self.frustum = frustum if frustum is not None and len(frustum) else None
         self.room = room if room is not None and len(room) and config.room_albedo > 0 else None
+        super().__init__(model, escene, target, mask, points, config, sensor_dict=sensor_dict, window=window)
+
+    def fits_without_pixels(self) -> bool:
+        # A photo without objects: the light is fitted to the visible room alone (frustum, room bound).
+        return self.frustum is not None or self.room is not None
 
     def terms(self, image, radiance, depth, mask):
         t = super().terms(image, radiance, depth, mask)

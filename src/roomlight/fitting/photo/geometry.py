@@ -194,7 +194,7 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
             objects.append(object_mesh(mesh, labels_g, label, normals_g))
         except RoomlightError:
             skipped.append(label)
-    if not objects:
+    if case.objects.ids and not objects:
         raise RoomlightError(f"{case.files.get('mask', 'mask')}: no object keeps a triangle of the depth mesh at "
                              f"{gw}x{gh}; raise geometry_size or check the mask against the depth map")
     note = (f"objects {', '.join(map(str, skipped))} are too small for the {gw}x{gh} depth mesh and are left out"
@@ -212,7 +212,7 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
     kept = [o.label for o in objects]
     labels_r = np.where(np.isin(labels_r, kept), labels_r, 0).astype(np.int32)
     loss_mask = _interior(labels_r)
-    if not loss_mask.any():
+    if objects and not loss_mask.any():
         raise RoomlightError(f"{case.files.get('mask', 'mask')}: at the {rw}x{rh} render resolution no object has a "
                              "pixel whose neighbours all belong to it; raise render_size or use larger objects")
     depth_r = resize_nearest(case.depth, rh, rw)
@@ -238,7 +238,8 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
     # (t > 0: a point exactly at the camera centre has no direction to look the emitter up in)
     t = np.maximum(t, 1e-3)
     free = pts_r.reshape(-1, 3)[pix] * t[:, None]
-    return PhotoGeometry(k_ren, target, labels_r, loss_mask, mesh, objects, frustum, free, np.concatenate(obj_pts),
+    obj_pts = np.concatenate(obj_pts) if obj_pts else np.zeros((0, 3), np.float32)
+    return PhotoGeometry(k_ren, target, labels_r, loss_mask, mesh, objects, frustum, free, obj_pts,
                          pts_r.reshape(-1, 3))
 
 

@@ -30,7 +30,7 @@ class ObjectLabels:
     """(H, W) int32 ``labels`` (0 background) and how they were read.
 
     Attributes:
-        kind: ``binary``, ``labels`` or ``colours``.
+        kind: ``binary``, ``labels``, ``colours``, or ``none`` (no mask given: no objects).
         ids: the object labels present, ascending.
         notes: human-readable remarks (e.g. objects dropped as too small).
     """

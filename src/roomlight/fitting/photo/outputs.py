@@ -116,13 +116,16 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
                                        lambda p: write_exr(p, {c: img[..., i] for i, c in enumerate("RGB")}))
     paths["render_png"] = atomic_write(out / "render.png", lambda p: save_png(p, _srgb8(img)))
     target, mask = fit.geometry.target, fit.geometry.loss_mask
+    if not mask.any():  # no objects: the render is the light seen through the frame, all of it compared
+        mask = np.ones_like(mask)
     err = np.abs(img - target).mean(-1) * mask
     scale = max(float(err.max()), 1e-6)
     err_rgb = (np.stack([err / scale, (err / scale) ** 2, np.zeros_like(err)], -1) * 255).astype(np.uint8)
     strip = np.concatenate([_srgb8(target), _srgb8(img), err_rgb], axis=1)
     paths["compare"] = atomic_write(out / "compare.png", lambda p: save_png(p, strip))
     paths["loss"] = atomic_write(out / "loss.png", lambda p: plot_history(r.history, p, title=f"fit-photo {fit.method}"))
-    paths["objects"] = atomic_write(out / "objects.ply", lambda p: _write_objects(p, fit))
+    if fit.geometry.objects:
+        paths["objects"] = atomic_write(out / "objects.ply", lambda p: _write_objects(p, fit))
 
     # Absolute paths: the folder may be used from elsewhere later (``roomlight insert``).
     inputs = {k: str(Path(v).resolve()) if Path(v).exists() else v for k, v in case.files.items()}

@@ -61,7 +61,8 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
 
     t0 = time.perf_counter()
     main = fits[0]
-    sites = choose_probe_sites(main.geometry.objects, config.probe_count, config.probe_size, main.geometry.intrinsics)
+    sites = choose_probe_sites(_probe_surfaces(main.geometry), config.probe_count, config.probe_size,
+                               main.geometry.intrinsics)
     views = [light_view(f) for f in fits]
     if len(fits) == 1 and main.result.depth is not None:
         v = views[0]
@@ -79,3 +80,15 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
     timings = {"probes": time.perf_counter() - t0, "total": time.perf_counter() - t_start}
     say(f"probes: {len(sites)} positions under {len(views)} light(s) in {timings['probes']:.1f} s -> {out / 'probes.png'}")
     return PhotoRun(fits, folders, timings)
+
+
+def _probe_surfaces(geometry) -> list:
+    """Where the probes rest: the objects, or, in a photo without objects, the visible room itself (its
+    whole depth mesh, as one surface)."""
+    if geometry.objects:
+        return geometry.objects
+    import numpy as np
+
+    from roomlight.fitting.photo.unproject import object_mesh
+
+    return [object_mesh(geometry.mesh, np.ones(geometry.mesh.shape, np.int32), 1, None)]
