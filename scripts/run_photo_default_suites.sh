@@ -12,18 +12,18 @@ FIT=(--preset fast --eval-spp 64 --quiet)
 PAPER=(--set albedo_prior=0 --set room_albedo=0)   # the paper's objective: no reflectance prior, no room bound
 $R bench make-photos --suite wide --res 96x128 --spp 64 --probe-spp 256 --quiet \
     --out bench/wide24 --n 24 --seed 500100
-$R bench run-photos bench/wide24 --out results/wide24-defaults "${FIT[@]}" --methods prior
+$R bench run-photos bench/wide24 --out results/wide24-room-bound "${FIT[@]}" --methods prior
 $R bench run-photos bench/wide24 --out results/wide24-paper-objective "${FIT[@]}" --methods prior "${PAPER[@]}"
-$R bench run-photos bench/wide24 --out results/wide24-defaults "${FIT[@]}" \
+$R bench run-photos bench/wide24 --out results/wide24-room-bound "${FIT[@]}" \
     --methods prior,oracle,oracle-envmap,naive-paste,prior-envmap,direct-envmap
 $R bench make-photos --out bench/photos24 --n 24 --seed 400100 --res 96x128 \
     --spp 64 --probe-spp 256 --quiet
-$R bench run-photos bench/photos24 --out results/photos24-defaults "${FIT[@]}" --methods prior
+$R bench run-photos bench/photos24 --out results/photos24-room-bound "${FIT[@]}" --methods prior
 $R bench run-photos bench/photos24 --out results/photos24-paper-objective "${FIT[@]}" --methods prior "${PAPER[@]}"
-$R bench run-photos bench/photos24 --out results/photos24-defaults "${FIT[@]}" \
+$R bench run-photos bench/photos24 --out results/photos24-room-bound "${FIT[@]}" \
     --methods prior,oracle,oracle-envmap,naive-paste,prior-envmap
 scripts/run_insertion_study.sh
 .venv/bin/python benchmarks/insertion_diagnosis.py bench/photos24 --photos 8 --out results/insertion-diagnosis.json \
     > results/insertion-diagnosis.md
-$R bench run-photos bench/photos24 --out results/photos24-defaults "${FIT[@]}" \
+$R bench run-photos bench/photos24 --out results/photos24-room-bound "${FIT[@]}" \
     --methods prior,prior-envmap,direct-envmap,oracle,oracle-envmap,naive-paste

@@ -19,8 +19,10 @@ RESULTS = Path(__file__).parents[1] / "benchmarks" / "results"
 
 
 @pytest.mark.parametrize("folder, command", [("unseen64", "report"), ("photos24", "report-photos"),
-                                             ("photos24-default", "report-photos"),
-                                             ("wide24-default", "report-photos")])
+                                             ("photos24-reflectance-prior", "report-photos"),
+                                             ("wide24-reflectance-prior", "report-photos"),
+                                             ("wide24-room-bound", "report-photos"),
+                                             ("photos24-room-bound", "report-photos")])
 def test_a_committed_report_is_rebuilt_byte_for_byte(folder, command, tmp_path):
     src = RESULTS / folder
     work = tmp_path / folder
