@@ -13,10 +13,13 @@ interval, and every score's noise floor beside it:
   any fitted light of a results folder (``--results DIR``: its ``recovered.exr`` and fitted materials);
 - ``enclose``: the light's surface pushed behind the local scene (roomlight.core.emitter.enclose), or
   left where it is (the pipeline before that fix);
-- ``spp``: the composite's samples per pixel.
+- ``spp``: the composite's samples per pixel;
+- ``true albedo`` (``--albedo``): the local scene's albedo taken from the room itself (each pixel's
+  surface's diffuse reflectance, 4 × 4 rays per pixel) instead of estimated from the photograph under the
+  light (the original suite's rooms only).
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
-         [--hi-spp 256] [--quick] [--out FILE.json]
+         [--hi-spp 256] [--quick] [--albedo] [--out FILE.json]
 Resumable: each photo's records are kept in ``--out`` as they are made.
 """
 
@@ -60,6 +63,34 @@ def truth_noise(case_dir: Path, seed_offset: int = 1000):
     return np.where(labels[..., None] > 0, again, photo + (again - photo_again)).astype(np.float32)
 
 
+def true_albedo(case_dir: Path, supersample: int = 4):
+    """(H, W, 3) the diffuse reflectance of the surface each pixel of the photograph sees (its room and
+    its objects; ``supersample``² rays per pixel on a regular grid), or None for a captured-light photo."""
+    import drjit as dr
+
+    from roomlight.core.render.variant import mitsuba
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.roomscene import RoomScenes
+    from roomlight.evaluation.photobench.scoring import load_truth
+    from roomlight.evaluation.photobench.tracing import camera_rays
+
+    record = json.loads((case_dir / fmt.RECORD).read_text())
+    if "captured" in record:
+        return None
+    truth = load_truth(case_dir)
+    scene = RoomScenes(generate_room(record["room_seed"]), int(record["config"]["max_depth"])).scene(
+        {o.id: o.mitsuba_mesh() for o in truth.objects})
+    mi, cam, s = mitsuba(), truth.camera, supersample
+    jj, ii = np.meshgrid(np.arange(cam.width * s), np.arange(cam.height * s))
+    x, y = (jj.ravel() + 0.5) / s, (ii.ravel() + 0.5) / s
+    si = scene.ray_intersect(camera_rays(mi, dr, cam, mi.Float(x), mi.Float(y)))
+    rho = mi.Color3f(si.bsdf().eval_diffuse_reflectance(si, si.is_valid()))
+    rgb = np.stack([np.asarray(rho[c], np.float32) for c in range(3)], -1)
+    rgb[~np.asarray(si.is_valid())] = 0.0
+    return rgb.reshape(cam.height, s, cam.width, s, 3).mean((1, 3))
+
+
 def fitted_light(results: Path, photo: str, method: str):
     """(light, materials) of a fitted case of a results folder, or None."""
     from roomlight.core.io import read_panorama
@@ -79,7 +110,8 @@ def fitted_light(results: Path, photo: str, method: str):
     return light, materials
 
 
-def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False) -> list[dict]:
+def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False,
+                   albedo: bool = False) -> list[dict]:
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import composite_for_light, insertion_scores, read_insert_truth
     from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
@@ -107,8 +139,11 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
             got = fitted_light(res, case_dir.name, method)
             if got is not None:
                 lights[f"{method} ({res.name})"] = got
+    rho = true_albedo(case_dir) if albedo else None
     for name, (light, mats) in lights.items():
         variants = [("", dict(enclose=True, spp=spp))]
+        if rho is not None:
+            variants.append((" true albedo", dict(enclose=True, spp=spp, albedo=rho)))
         if quick:
             pass
         elif light.kind == "mesh":
@@ -144,7 +179,9 @@ def table(records: list[dict]) -> str:
             cells.append(f"{x.mean():.2f} ± {x.std():.2f}" if len(x) else "–")
         lines.append(f"| {v} | {len(rs)} | " + " | ".join(cells) + " |")
     lines += ["", "| paired (a − b) | region | object | shadow |", "|---|:---:|:---:|:---:|"]
-    pairs = [("oracle", "oracle-envmap"), ("oracle unenclosed", "oracle-envmap"), ("oracle", "oracle unenclosed")]
+    pairs = [("oracle", "oracle-envmap"), ("oracle unenclosed", "oracle-envmap"), ("oracle", "oracle unenclosed"),
+             ("oracle true albedo", "oracle-envmap true albedo")]
+    pairs += [(v[:-len(" true albedo")], v) for v in variants if v.endswith(" true albedo")]
     pairs += [(v, v.replace("prior (", "prior-envmap (")) for v in variants if v.startswith("prior (")]
     pairs += [(v, v + " unenclosed") for v in variants if v.startswith("prior (") and v + " unenclosed" in variants]
     for a, b in pairs:
@@ -153,7 +190,9 @@ def table(records: list[dict]) -> str:
             p = paired(records, a, b, key)
             cells.append("–" if p is None else f"{p[0]:+.2f} [{p[1]:+.2f}, {p[2]:+.2f}] {p[3]}/{p[4]}")
         lines.append(f"| {a} − {b} | " + " | ".join(cells) + " |")
-    lines += ["", distance_table(records, [p for p in pairs if "unenclosed" not in p[0] + p[1]])]
+    # against distance: the lights as the pipeline uses them, not the diagnostic variants
+    plain = [p for p in pairs if "unenclosed" not in p[0] + p[1] and "true albedo" not in p[0] + p[1]]
+    lines += ["", distance_table(records, plain)]
     return "\n".join(lines)
 
 
@@ -210,6 +249,7 @@ def main(argv=None) -> None:
     ap.add_argument("--hi-spp", type=int, default=256)
     ap.add_argument("--out", type=Path, default=Path("results/insertion-diagnosis.json"))
     ap.add_argument("--quick", action="store_true", help="each light once: no unenclosed, other-seed or more-samples variant")
+    ap.add_argument("--albedo", action="store_true", help="also composite with the local scene's true albedo")
     args = ap.parse_args(argv)
     photos = sorted(p for p in args.bench.glob("photo-*") if p.is_dir())
     photos = photos[:args.photos] if args.photos else photos
@@ -219,7 +259,7 @@ def main(argv=None) -> None:
         if d.name in done:
             continue
         print(f"[{k + 1}/{len(photos)}] {d.name}", file=sys.stderr, flush=True)
-        done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick)
+        done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick, args.albedo)
         tmp = args.out.with_suffix(".tmp")
         tmp.write_text(json.dumps(done))
         tmp.replace(args.out)

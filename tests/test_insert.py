@@ -327,3 +327,25 @@ def test_the_unseen_share_is_one_under_unseen_light_only_and_falls_as_the_seen_l
         shares[name] = info["objects"][0]["unseen_light_share"]
     assert shares["unseen only"] == 1.0
     assert 0.0 < shares["seen x4"] < shares["uniform"] < 1.0, shares
+
+
+@pytest.mark.mitsuba
+def test_a_given_albedo_replaces_the_estimate_and_what_the_object_changes_scales_with_it(fitted_dir):
+    """The local scene's albedo passed in (the diagnosis's true albedo) is used as it is: given the estimate
+    itself the composite is the same bit for bit; what the object changes around it (its shadow, light it
+    throws) is a reflection off the local scene, so it doubles with the albedo (to first order: a little
+    more through the second bounce)."""
+    fitted = load_fitted_photo(fitted_dir)
+    placed = place_objects(fitted, [InsertSpec("sphere", at=(16, 21), scale=0.35, material="diffuse:0.5")])
+    base = composite_objects(fitted, placed, size=32, spp=16, seed=3)
+    again = composite_objects(fitted, placed, size=32, spp=16, seed=3, albedo=base.albedo)
+    np.testing.assert_array_equal(again.composite, base.composite)
+    change = {}
+    for a in (0.1, 0.2):
+        res = composite_objects(fitted, placed, size=32, spp=16, seed=3, albedo=np.full_like(base.albedo, a))
+        outside = res.coverage == 0
+        change[a] = float((res.composite - res.photo)[outside].sum())
+    assert abs(change[0.1]) > 1e-3
+    assert 1.9 < change[0.2] / change[0.1] < 2.4, change
+    with pytest.raises(Exception, match="albedo"):
+        composite_objects(fitted, placed, size=32, spp=4, albedo=np.zeros((3, 3, 3)))

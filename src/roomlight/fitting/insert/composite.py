@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from roomlight.errors import RoomlightError
 from roomlight.fitting.insert.fitted import FittedPhoto
 from roomlight.fitting.insert.objects import InsertSpec, PlacedObject, place_object
 
@@ -275,7 +276,8 @@ def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512
 
 def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int = 512, spp: int = 256,
                       seed: int = 0, max_depth: int = 5, say=None, local_scene: bool = True,
-                      unseen_share: bool = False, enclose: bool = True) -> InsertResult:
+                      unseen_share: bool = False, enclose: bool = True, albedo: np.ndarray | None = None
+                      ) -> InsertResult:
     """Composite objects already placed (camera frame) into the fitted photograph.
 
     ``local_scene=False`` renders the objects under the light alone, without the photograph's depth mesh
@@ -285,7 +287,8 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     its shading they give (``unseen_light_share`` in ``info["objects"]``): how much of its look rests on the
     prior's guess of the room rather than on what the photograph showed. ``enclose=False`` keeps a 2.5D
     light's surface where it is, even through the local scene (:mod:`roomlight.core.emitter.enclose`:
-    for comparison only).
+    for comparison only). ``albedo``: (h, w, 3) the local scene's albedo at the working size, used instead of
+    the one estimated from the photograph (to measure what that estimate costs: the scene's true albedo).
     """
     from roomlight.fitting.photo.geometry import resize_image, working_size
 
@@ -298,7 +301,11 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     t1 = time.perf_counter()
     local = _LocalScene(fitted, (oh, ow), max_depth, with_scene=local_scene, placed=placed, enclose=enclose)
     photo = resize_image(case.image, oh, ow)
-    if local_scene:
+    if albedo is not None:
+        albedo = np.asarray(albedo, np.float32)
+        if albedo.shape != photo.shape:
+            raise RoomlightError(f"composite_objects: albedo is {albedo.shape}, the working size {photo.shape}")
+    elif local_scene:
         say(f"estimating the scene's albedo under the {fitted.method} light ({ow}x{oh}, {spp} spp)")
         white = local.render(None, {}, spp, seed + 1)
         albedo = estimate_albedo(photo, white)
