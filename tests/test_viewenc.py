@@ -149,6 +149,80 @@ def test_view_input_divides_by_the_view_exposure_and_zeroes_unseen_cells(tiny_pr
     assert bool((x[:, ~part.seen] == 0).all()) and bool((x[4] == part.seen.float()).all())
 
 
+def test_withheld_depth_empties_the_depth_channel_and_nothing_else(tiny_prior):
+    from roomlight.prior.model.view_encoder import DEPTH_CHANNEL
+
+    rad, depth = _smooth_panorama(16)
+    spec = CropSpec(60.0, 20, 30)
+    image, points = cut_view(rad, depth, spec)
+    part = lift_view(points, image, crop_rotation(spec), (16, 32))
+    with_d, k = view_input(part, tiny_prior.normalization)
+    without, k2 = view_input(part, tiny_prior.normalization, depth=False)
+    assert k == k2
+    assert float(with_d[DEPTH_CHANNEL][part.seen].abs().min()) > 0      # a z-scored depth is not 0 over a view
+    assert bool((without[DEPTH_CHANNEL] == 0).all())
+    keep = [c for c in range(5) if c != DEPTH_CHANNEL]
+    assert torch.equal(with_d[keep], without[keep])
+    # lifted at other distances (a photograph without depth): the same cells and radiance
+    far = lift_view(points * 3.0, image, crop_rotation(spec), (16, 32))
+    assert torch.equal(far.seen, part.seen)
+    torch.testing.assert_close(view_input(far, tiny_prior.normalization, depth=False)[0], without)
+
+
+def test_depth_dropout_withholds_that_share_of_views_and_zero_keeps_the_random_sequence(tiny_prior):
+    from roomlight.prior.model.view_encoder import DEPTH_CHANNEL
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.views import training_view
+
+    rad, depth = _smooth_panorama(16)
+    norm = tiny_prior.normalization
+    a, b = np.random.default_rng(5), np.random.default_rng(5)
+    v0 = training_view(rad, depth, a, ViewTrainConfig(depth_dropout=0.0), norm)
+    v1 = training_view(rad, depth, b, ViewTrainConfig(), norm, withhold=False)
+    assert v0.depth_given and torch.equal(v0.x, v1.x)
+    assert a.random() == b.random()                      # no extra draw: older runs replay the same views
+    rng = np.random.default_rng(0)
+    views = [training_view(rad, depth, rng, ViewTrainConfig(depth_dropout=0.5), norm) for _ in range(200)]
+    given = np.array([v.depth_given for v in views])
+    assert 0.4 < given.mean() < 0.6                      # binomial(200, 0.5): 4.2 sigma either side
+    for v in views:
+        assert bool((v.x[DEPTH_CHANNEL] == 0).all()) != v.depth_given
+    with pytest.raises(Exception, match="out of range"):
+        ViewTrainConfig(depth_dropout=1.5)
+
+
+def test_training_with_depth_dropout_scores_validation_both_ways(tiny_prior, tmp_path):
+    import json
+
+    from roomlight.prior.data.toy import write_toy_dataset
+    from roomlight.prior.model import PanoVAE
+    from roomlight.prior.model.view_encoder import DEPTH_OPTIONAL_DIR
+    from roomlight.prior.model.weights import file_sha256
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
+
+    write_toy_dataset(tmp_path / "data" / "train", 6, height=16)
+    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
+    cfg = ViewTrainConfig(batch_size=3, max_steps=2, val_every=1, ckpt_every=2, val_views=2, log_every=1,
+                          progress=False, depth_dropout=0.5)
+    run = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None)
+    run.fit()
+    vals = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
+    vals = [v for v in vals if v["event"] == "val"]
+    assert vals and all(v["selection"] == pytest.approx(0.5 * (v["total"] + v["nodepth_total"])) for v in vals)
+    best = json.loads((tmp_path / "run" / "best" / "best.json").read_text())
+    assert best["selection"] == pytest.approx(min(v["selection"] for v in vals))
+    # shipped beside the prior under its own name, it is found as the depth-optional encoder
+    tiny_prior.save_pretrained(tmp_path / "prior")
+    enc = ViewEncoder.from_pretrained(tmp_path / "run" / "best")
+    enc.prior_sha256 = file_sha256(tmp_path / "prior" / "model.safetensors")
+    enc.save_pretrained(tmp_path / "prior" / DEPTH_OPTIONAL_DIR, training_config=enc.metadata["training"])
+    loaded = PanoVAE.from_pretrained(tmp_path / "prior")
+    assert loaded.view_encoder is None and loaded.depth_optional_view_encoder is not None
+    assert loaded.depth_optional_view_encoder.reads_without_depth
+    assert not ViewEncoder.from_prior(tiny_prior).reads_without_depth
+
+
 def test_saved_view_encoder_is_found_beside_its_prior_and_refused_beside_another(tiny_prior, tmp_path):
     from roomlight.prior.model import PanoVAE
     from roomlight.prior.model.weights import file_sha256

@@ -32,7 +32,8 @@ def command(photo, out_dir, fov, pitch, roll, depth, depth_kind, model, refine, 
     """Recover the room's light from PHOTO alone: a JPEG, PNG or linear EXR; no depth, no mask.
 
     The field of view comes from the EXIF focal length when the file has one (else --fov, else
-    60 degrees, with a note). The prior's view encoder reads the photograph with a guessed depth
+    60 degrees, with a note). Without --depth the prior's depth-optional view encoder reads the
+    photograph and judges the room's size from it; a prior without one reads it with a guessed depth
     (a floor 1.5 m below the camera, the rest 3.5 m away; docs/photo.md, "From any photograph").
 
     \b

@@ -1,11 +1,14 @@
 """A room's light from one ordinary photograph, in seconds: no depth map, no mask (``roomlight estimate``).
 
 What a photograph alone gives: its pixels and, from its EXIF, its field of view. The prior's view
-encoder reads what the photograph shows lifted onto the sphere around the camera, with the depth of every
-seen pixel, which an ordinary photograph lacks. A geometric guess stands in for it: a floor ``EYE_HEIGHT``
+encoder reads what the photograph shows lifted onto the sphere around the camera. Without a depth map
+the prior's depth-optional view encoder (``view_encoder_depth_optional/``, trained with depth withheld
+from half its views) reads it with the depth channel empty and judges the room's size from what it sees.
+A prior without one falls back on its depth-trained encoder and a geometric guess: a floor ``EYE_HEIGHT``
 below the camera where a pixel looks down at it, everything else ``GUESS_DISTANCE`` away. (Feeding the
-decoded room's own depth back to the encoder does not find the true depth: the decoded room reproduces
-the depth it was given to within 1 % in the seen directions, so the guess sets the room's size.)
+decoded room's own depth back to that encoder does not find the true depth: the decoded room reproduces
+the depth it was given to within 1 % in the seen directions, so the guess sets the room's size.) A depth
+map, when given, is read by the depth-trained encoder.
 The encoder predicts the room's latent z and its exposure; the camera is the decoded room's centre (the
 view encoder decodes the room around the camera, in the photograph's metres), so the light's frame is the
 camera's orientation (pitch and roll) and no shift.
@@ -100,14 +103,15 @@ class Estimate:
             camera -> room (the camera at the centre).
         latent: (D,) the prior's latent.
         log_exposure: ln of the factor from the decoded radiance to the photograph's units.
-        depth_seen: (H, W) the radial depth the view encoder read for the photograph's pixels (the guess).
+        depth_seen: (H, W) the radial depth the view encoder read for the photograph's pixels (given or
+            guessed), or None when it read the photograph without depth.
         info: the depth guess, refinement, timings, for ``result.json``.
     """
 
     light: object
     latent: torch.Tensor
     log_exposure: float
-    depth_seen: np.ndarray
+    depth_seen: np.ndarray | None
     info: dict = field(default_factory=dict)
 
 
@@ -129,7 +133,7 @@ def _rays_room(camera, pitch: float, roll: float) -> np.ndarray:
 
 def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: float = 0.0, refine_steps: int = 0,
                    refine_lr: float = 0.05, refine_pixels: int = 4096, tau: float = 0.99, seed: int = 0,
-                   depth: np.ndarray | None = None) -> Estimate:
+                   depth: np.ndarray | None = None, without_depth: str = "auto") -> Estimate:
     """The light of one photograph (module docstring).
 
     Args:
@@ -138,7 +142,10 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
         model: a prior with a view encoder (a ``PanoVAE``).
         pitch, roll: the camera's orientation in degrees (level: 0, 0).
         refine_steps: steps of the fit to the photograph's pixels (0: none).
-        depth: (H, W) the photograph's radial depth in metres when known: it replaces the guess.
+        depth: (H, W) the photograph's radial depth in metres when known.
+        without_depth: with no ``depth``, how the view encoder reads the photograph: ``auto`` (the
+            depth-optional encoder when the prior has one, else the guess), ``withheld`` (that encoder,
+            required) or ``guess`` (the depth-trained encoder and the geometric guess).
     """
     from roomlight.core.light import Light
     from roomlight.fitting.photo.camera import camera_rotation
@@ -151,16 +158,28 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
         raise RoomlightError("estimate needs a prior that decodes depth (a 2.5D prior, not an env-map one)")
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
+    if without_depth not in ("auto", "withheld", "guess"):
+        raise RoomlightError(f"without_depth must be auto, withheld or guess, not {without_depth!r}")
+    reader = getattr(model, "depth_optional_view_encoder", None)
+    if depth is None and without_depth == "withheld" and reader is None:
+        raise RoomlightError("this prior has no depth-optional view encoder (view_encoder_depth_optional/ beside "
+                             "its weights; train one with `roomlight train-view-encoder --set depth_dropout=0.5`)")
     rays = _rays_room(camera, pitch, roll)
-    guessed = depth is None
-    depth = first_depth_guess(rays) if guessed else np.asarray(depth, np.float32)
+    mode = "given" if depth is not None else "withheld" if (reader is not None and without_depth != "guess") else "guess"
+    # without depth the pixels are lifted at the guess's distances: only their directions matter then
+    lifted = np.asarray(depth, np.float32) if mode == "given" else first_depth_guess(rays)
     dev = next(model.parameters()).device
     with torch.no_grad():
-        z, log_exposure, about = view_latent(model, _case(image, camera, depth, pitch, roll))
+        if mode == "withheld":
+            z, log_exposure, about = view_latent(model, _case(image, camera, lifted, pitch, roll), reader, depth=False)
+        else:
+            z, log_exposure, about = view_latent(model, _case(image, camera, lifted, pitch, roll))
     timings["view_encoder"] = time.perf_counter() - t0
-    info: dict = {"depth": {"guess": {"eye_height_m": EYE_HEIGHT, "distance_m": GUESS_DISTANCE}} if guessed
-                  else {"given": True, "median_m": round(float(np.median(depth)), 4)},
-                  "seen_fraction": about["seen_fraction"], "view_log_exposure": round(log_exposure, 4)}
+    depth_info = {"given": {"given": True, "median_m": round(float(np.median(lifted)), 4)},
+                  "withheld": {"withheld": True, "encoder": "view_encoder_depth_optional"},
+                  "guess": {"guess": {"eye_height_m": EYE_HEIGHT, "distance_m": GUESS_DISTANCE}}}[mode]
+    info: dict = {"depth": depth_info, "seen_fraction": about["seen_fraction"],
+                  "view_log_exposure": round(log_exposure, 4)}
     if refine_steps > 0:
         t1 = time.perf_counter()
         z, log_exposure, info["refine"] = _refine(model, z, log_exposure, image, rays, refine_steps, refine_lr,
@@ -174,7 +193,7 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
     light = Light(radiance, dep[0, 0].float().cpu(), "mesh", frame)
     timings["total"] = time.perf_counter() - t0
     info["timings_s"] = {k: round(v, 3) for k, v in timings.items()}
-    return Estimate(light, z.detach().cpu(), float(log_exposure), depth, info)
+    return Estimate(light, z.detach().cpu(), float(log_exposure), None if mode == "withheld" else lifted, info)
 
 
 def _refine(model, z0: torch.Tensor, s0: float, image: np.ndarray, rays: np.ndarray, steps: int, lr: float,

@@ -80,16 +80,20 @@ def photo_partial_panorama(case, resolution: tuple[int, int]):
 
 
 @torch.no_grad()
-def view_latent(model, case) -> tuple[torch.Tensor, float, dict]:
-    """The view encoder's start: (z (D,), log exposure in the photograph's units, description)."""
+def view_latent(model, case, encoder=None, depth: bool = True) -> tuple[torch.Tensor, float, dict]:
+    """The view encoder's start: (z (D,), log exposure in the photograph's units, description).
+
+    ``encoder``: the view encoder to read with (default ``model.view_encoder``); ``depth=False``: the
+    case's depth is not known (its values only place the pixels' directions) and is withheld from the
+    encoder, which should then be one that reads without depth (``ViewEncoder.reads_without_depth``)."""
     from roomlight.prior.model.view_encoder import view_input
 
-    encoder = model.view_encoder
+    encoder = encoder or model.view_encoder
     partial = photo_partial_panorama(case, model.config.resolution)
     if not bool(partial.seen.any()):
         raise RoomlightError("--init view: the photograph shows no background (every pixel is an object); "
                              "pass --init samples")
-    x, k = view_input(partial, model.normalization)
+    x, k = view_input(partial, model.normalization, depth=depth)
     z, s = encoder(x[None].float())
     log_exposure = math.log(k) + float(s[0])
     return z[0].cpu(), log_exposure, {"seen_fraction": round(partial.seen_fraction, 4),

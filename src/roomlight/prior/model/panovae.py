@@ -59,6 +59,7 @@ class PanoVAE(SavedPrior, nn.Module):
         # Held in a tuple so that it is not a sub-module: the prior's state_dict, checksum and
         # device stay its own (the view encoder always runs on the CPU).
         self._view_encoder: tuple = ()
+        self._depth_optional_view_encoder: tuple = ()
         self._weights_sha256: str | None = None
 
     @property
@@ -71,6 +72,19 @@ class PanoVAE(SavedPrior, nn.Module):
         if encoder is not None and encoder.config != self.config:
             raise RoomlightError("set_view_encoder: the view encoder was made for another prior architecture")
         self._view_encoder = () if encoder is None else (encoder.to("cpu").eval(),)
+
+    @property
+    def depth_optional_view_encoder(self):
+        """The view encoder trained for this prior with depth withheld from half its views (it reads a
+        photograph without a depth map; ``roomlight estimate`` uses it), or None."""
+        return self._depth_optional_view_encoder[0] if self._depth_optional_view_encoder else None
+
+    def set_depth_optional_view_encoder(self, encoder) -> None:
+        """Attach a depth-optional view encoder (None detaches); same rules as :meth:`set_view_encoder`."""
+        if encoder is not None and encoder.config != self.config:
+            raise RoomlightError("set_depth_optional_view_encoder: the view encoder was made for another prior "
+                                 "architecture")
+        self._depth_optional_view_encoder = () if encoder is None else (encoder.to("cpu").eval(),)
 
     # ------------------------------------------------------------------ normalised domain
     def _check_input(self, x: torch.Tensor, channels: int, what: str) -> None:
@@ -145,7 +159,8 @@ class PanoVAE(SavedPrior, nn.Module):
         ``model.safetensors``, ``config.yaml``, ``last_epoch.pth``). The authors' format is
         recognised by ``config.yaml`` + a ``.pth`` file; it is a third-party pickle and is loaded
         with ``weights_only=True`` (a warning says so). A ``view_encoder/`` folder beside the
-        weights, trained for them, is loaded as :attr:`view_encoder`. Returns the model in eval mode.
+        weights, trained for them, is loaded as :attr:`view_encoder`, and a ``view_encoder_depth_optional/``
+        as :attr:`depth_optional_view_encoder`. Returns the model in eval mode.
         """
         path = Path(path)
         if not path.exists():
@@ -153,10 +168,12 @@ class PanoVAE(SavedPrior, nn.Module):
         directory = path if path.is_dir() else path.parent
         if (directory / CONFIG_NAME).exists() and (directory / WEIGHTS_NAME).exists():
             model = cls._load_saved(directory)
-            from roomlight.prior.model.view_encoder import load_view_encoder_beside
+            from roomlight.prior.model.view_encoder import DEPTH_OPTIONAL_DIR, load_view_encoder_beside
 
             # the weights' checksum was verified while loading them: no second pass over the file
             model.set_view_encoder(load_view_encoder_beside(directory, model.config, model._weights_sha256))
+            model.set_depth_optional_view_encoder(load_view_encoder_beside(
+                directory, model.config, model._weights_sha256, name=DEPTH_OPTIONAL_DIR))
         elif (directory / "config.yaml").exists() or path.suffix == ".pth":
             from roomlight.prior.model.convert import load_authors_run
 

@@ -6,6 +6,12 @@ prior's resolution (:func:`view_input`):
     (log1p R, log1p G, log1p B, log D) z-scored with the prior's statistics, 0 where unseen,
     and the seen mask (1 / 0).
 
+Without a depth map (``view_input(..., depth=False)``) the log D channel is 0 everywhere, which a
+z-scored map never is over a whole view; an encoder trained with depth withheld from part of its views
+(``ViewTrainConfig.depth_dropout`` > 0; :attr:`ViewEncoder.reads_without_depth`) reads such an input as
+"depth unknown" and predicts the room's size from what it sees. Encoders trained without that were never
+shown it.
+
 Radiance is first divided by the view's own log-average luminance ``k`` (over seen cells that
 are not saturated), because a photograph's units are arbitrary. The network predicts z and
 ``s``: the light in the units of the photograph is ``k · e^s · decode(z).radiance``; depth is in
@@ -34,10 +40,15 @@ from roomlight.prior.model.normalization import Normalization
 from roomlight.prior.model.weights import file_sha256, load_state_dict_checked, load_weights_file, read_config_json
 
 __all__ = ["ViewEncoder", "view_input", "view_exposure", "load_view_encoder_beside", "VIEW_ENCODER_DIR",
-           "FORMAT_NAME", "SATURATION"]
+           "DEPTH_OPTIONAL_DIR", "DEPTH_CHANNEL", "withhold_depth", "FORMAT_NAME", "SATURATION"]
 
 #: Where a prior's view encoder lives, inside the prior's model folder.
 VIEW_ENCODER_DIR = "view_encoder"
+#: Where a prior's depth-optional view encoder lives (trained with depth withheld from half its views):
+#: what ``roomlight estimate`` reads a photograph without a depth map with.
+DEPTH_OPTIONAL_DIR = "view_encoder_depth_optional"
+#: Index of the log-depth channel in the network's input.
+DEPTH_CHANNEL = 3
 FORMAT_NAME = "roomlight.view-encoder"
 FORMAT_VERSION = 1
 WEIGHTS_NAME = "model.safetensors"
@@ -58,15 +69,27 @@ def view_exposure(partial: PartialPanorama, saturation: float = SATURATION) -> f
     return float(torch.exp(torch.log(y + LOG_EPS).mean()))
 
 
-def view_input(partial: PartialPanorama, normalization: Normalization, exposure: float | None = None
-               ) -> tuple[torch.Tensor, float]:
-    """The network's input (5, H, W) for a partial panorama, and the ``k`` it was divided by."""
+def view_input(partial: PartialPanorama, normalization: Normalization, exposure: float | None = None,
+               depth: bool = True) -> tuple[torch.Tensor, float]:
+    """The network's input (5, H, W) for a partial panorama, and the ``k`` it was divided by.
+
+    ``depth=False``: the partial panorama's depth is not known (a photograph without a depth map, lifted
+    at any distance: the directions do not depend on it); the log-depth channel is 0 everywhere."""
     k = view_exposure(partial) if exposure is None else float(exposure)
     seen = partial.seen
-    depth = torch.where(seen[None], partial.log_depth.exp(), torch.ones_like(partial.log_depth))
-    x = normalization.normalize((partial.radiance / k)[None], depth[None])[0]
+    depth_m = torch.where(seen[None], partial.log_depth.exp(), torch.ones_like(partial.log_depth))
+    x = normalization.normalize((partial.radiance / k)[None], depth_m[None])[0]
     x = x * seen[None].to(x.dtype)
+    if not depth:
+        x = withhold_depth(x)
     return torch.cat([x, seen[None].to(x.dtype)], dim=0), k
+
+
+def withhold_depth(x: torch.Tensor) -> torch.Tensor:
+    """A copy of network inputs (..., C, H, W) with the log-depth channel set to 0 (depth unknown)."""
+    x = x.clone()
+    x[..., DEPTH_CHANNEL, :, :] = 0.0
+    return x
 
 
 class ViewEncoder(nn.Module):
@@ -90,6 +113,12 @@ class ViewEncoder(nn.Module):
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         h = self.backbone.feature_maps(x)[-1].flatten(1)
         return self.to_latent(h), self.to_exposure(h)[:, 0]
+
+    @property
+    def reads_without_depth(self) -> bool:
+        """Whether it was trained with depth withheld from some of its views (module docstring)."""
+        training = (getattr(self, "metadata", None) or {}).get("training") or {}
+        return float(training.get("depth_dropout", 0.0)) > 0.0
 
     @classmethod
     def from_prior(cls, prior) -> "ViewEncoder":
@@ -152,16 +181,17 @@ class ViewEncoder(nn.Module):
         return net.eval()
 
 
-def load_view_encoder_beside(prior_dir, prior_config: ModelConfig, prior_sha256: str | None = None
-                             ) -> "ViewEncoder | None":
-    """The view encoder in ``prior_dir/view_encoder/``, or None when there is none or it was trained
-    for other prior weights (a warning says so: its latents would mean nothing to this decoder).
+def load_view_encoder_beside(prior_dir, prior_config: ModelConfig, prior_sha256: str | None = None,
+                             name: str = VIEW_ENCODER_DIR) -> "ViewEncoder | None":
+    """The view encoder in ``prior_dir/<name>/`` (``view_encoder/``, or :data:`DEPTH_OPTIONAL_DIR`), or
+    None when there is none or it was trained for other prior weights (a warning says so: its latents
+    would mean nothing to this decoder).
 
     ``prior_sha256``: the prior's weights checksum when the caller already verified it (the weights
     file is hashed otherwise)."""
     import warnings
 
-    folder = Path(prior_dir) / VIEW_ENCODER_DIR
+    folder = Path(prior_dir) / name
     if not (folder / CONFIG_NAME).exists():
         return None
     encoder = ViewEncoder.from_pretrained(folder, prior_config)

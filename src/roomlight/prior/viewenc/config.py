@@ -47,6 +47,10 @@ class ViewTrainConfig(StrictConfig):
     occluders: int = 3
     #: Mirror the panorama left-right with probability 1/2.
     mirror: bool = True
+    #: Share of training views whose depth is withheld (the log-depth channel set to 0), so that the
+    #: encoder also reads photographs without a depth map; 0 keeps every view's depth (and the random
+    #: sequence of runs made before this setting existed). Validation then scores each view both ways.
+    depth_dropout: float = 0.0
     #: Weights of the reconstruction of the whole panorama through the frozen decoder
     #: (the fields of :class:`roomlight.prior.losses.LossConfig`; the KL weight is unused).
     loss: dict = field(default_factory=lambda: LossConfig(peak=0.3, kl_beta=0.0).to_dict())
@@ -69,7 +73,8 @@ class ViewTrainConfig(StrictConfig):
 
     def __post_init__(self):
         ok = (self.batch_size >= 1 and self.max_steps >= 1 and self.lr > 0 and 0 < self.fov_deg[0] <= self.fov_deg[1] < 170
-              and 0 < self.exposure_key[0] <= self.exposure_key[1] and self.occluders >= 0 and self.val_views >= 1)
+              and 0 < self.exposure_key[0] <= self.exposure_key[1] and self.occluders >= 0 and self.val_views >= 1
+              and 0.0 <= self.depth_dropout <= 1.0)
         if not ok:
             raise RoomlightError(f"view-encoder training settings out of range: {self.to_dict()}")
         LossConfig.from_dict(self.loss)

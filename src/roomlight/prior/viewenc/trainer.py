@@ -170,7 +170,9 @@ class ViewEncoderTrainer:
 
     def _validation_views(self, rad, dep) -> dict:
         rng = np.random.default_rng(10_000 + self.cfg.seed)
-        views = [training_view(rad[i], dep[i], rng, self.cfg, self.prior.normalization) for i in range(len(rad))]
+        # every validation view keeps its depth; with depth_dropout the same views are also scored without it
+        views = [training_view(rad[i], dep[i], rng, self.cfg, self.prior.normalization, withhold=False)
+                 for i in range(len(rad))]
         rad = torch.stack([r.flip(-1) if v.mirrored else r for r, v in zip(rad, views)])
         dep = torch.stack([d.flip(-1) if v.mirrored else d for d, v in zip(dep, views)])
         with torch.no_grad():
@@ -237,13 +239,24 @@ class ViewEncoderTrainer:
 
     @torch.no_grad()
     def validate(self) -> dict:
-        """Scores of the fixed validation views (loss terms, LDR PSNR, depth AbsRel); keeps the best."""
+        """Scores of the fixed validation views (loss terms, LDR PSNR, depth AbsRel); keeps the best.
+
+        With ``depth_dropout`` > 0 the views are scored a second time with their depth withheld
+        (``nodepth_*``), and the best is the lowest mean of the two totals (``selection``)."""
+        from roomlight.prior.model.view_encoder import withhold_depth
+
         self.net.eval()
         z, s = self.net(self.val["x"])
         scores = self._scores(z, s)
+        selection = scores["total"]
+        if self.cfg.depth_dropout > 0:
+            z, s = self.net(withhold_depth(self.val["x"]))
+            scores.update({f"nodepth_{k}": v for k, v in self._scores(z, s).items()})
+            selection = 0.5 * (scores["total"] + scores["nodepth_total"])
+            scores["selection"] = selection
         self._log("val", self.step, **scores)
-        if scores["total"] < self.best:
-            self.best = scores["total"]
+        if selection < self.best:
+            self.best = selection
             tmp = self.run_dir / ".tmp-best"
             shutil.rmtree(tmp, ignore_errors=True)
             self.net.save_pretrained(tmp, training_config=self.cfg.to_dict())
