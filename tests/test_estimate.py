@@ -119,7 +119,11 @@ def test_the_light_in_the_photographs_directions_matches_its_pixels_and_refine_b
 
 def test_a_known_depth_replaces_the_guess_and_sets_the_room_s_size(tmp_path):
     """In a room twice the guess's size, the decoded room in the photograph's directions is about the guess's
-    size without --depth and the true size with it."""
+    size when the depth-trained encoder reads the guess and the true size with --depth. The depth-optional
+    encoder, reading the photograph without depth (estimate's default), judges the size from what it sees:
+    this small synthetic room, scaled up, it takes for a small one (measured: 0.31x the true size, the
+    guess 0.53x), so only its path is checked here; its accuracy is measured on rendered rooms
+    (benchmarks/view_encoder_depth.py, docs/results.md)."""
     from helpers_photo import bright_wall_room, make_tiny_photo
 
     from roomlight.core.geometry.equirect import sample_equirect
@@ -136,14 +140,18 @@ def test_a_known_depth_replaces_the_guess_and_sets_the_room_s_size(tmp_path):
     true_r = radial_distance(case.depth, case.intrinsics, case.depth_kind)
     rays = torch.from_numpy(_rays_room(case.intrinsics, case.pitch_deg, 0.0).reshape(-1, 3)).float()
 
-    def size_error(given):
-        est = estimate_light(np.minimum(case.image, 1.0), case.intrinsics, model, case.pitch_deg, depth=given)
+    def size_error(given, without_depth="auto"):
+        est = estimate_light(np.minimum(case.image, 1.0), case.intrinsics, model, case.pitch_deg, depth=given,
+                             without_depth=without_depth)
         seen = sample_equirect(torch.as_tensor(est.light.depth)[None, None], rays)[0, 0].numpy().reshape(true_r.shape)
-        return float(np.median(np.abs(np.log(seen / true_r))))
+        return float(np.median(np.abs(np.log(seen / true_r)))), est.info["depth"]
 
-    guessed, given = size_error(None), size_error(true_r.astype(np.float32))
+    (guessed, how_g), (withheld, how_w) = size_error(None, "guess"), size_error(None)
+    given, how = size_error(true_r.astype(np.float32))
+    assert "guess" in how_g and how_w.get("withheld") and how.get("given")
     assert guessed > 0.4          # the guess (3.5 m) against a 6 m room
     assert given < 0.15 < guessed
+    assert given < min(withheld, guessed)
     # and from the command line, one line for a depth of the wrong size
     np.save(tmp_path / "small.npy", np.ones((4, 4), np.float32))
     from roomlight.core.color import linear_to_srgb
@@ -153,3 +161,11 @@ def test_a_known_depth_replaces_the_guess_and_sets_the_room_s_size(tmp_path):
     r = CliRunner().invoke(cli, ["estimate", str(png), "--fov", "70", "--depth", str(tmp_path / "small.npy"),
                                  "--out", str(tmp_path / "e")])
     assert r.exit_code != 0 and "depth is 4x4" in r.output and "Traceback" not in r.output, r.output
+
+
+def test_the_command_s_refine_steps_are_the_library_s():
+    from roomlight.cli.estimate import command
+    from roomlight.fitting.photo.estimate import REFINE_STEPS
+
+    steps = next(p for p in command.params if p.name == "steps")
+    assert steps.default == REFINE_STEPS

@@ -764,3 +764,27 @@ def test_stratified_inserts_spread_over_distance_and_height_away_from_the_probes
         assert info["pixels"][str(o["label"])] >= cfg.min_pixels
     # the default keeps the original placement: at the probes, no strata recorded
     assert PhotoBenchConfig().insert_placement == "probes"
+
+
+@pytest.mark.mitsuba
+def test_the_estimate_rows_read_the_photo_alone_with_the_camera_at_the_light_s_centre(built, tmp_path):
+    """``estimate`` on a photo case: the bundled prior's light from the image, its frame the camera's tilt with
+    no shift (the camera at the light's centre), probes scored, no materials and nothing inserted."""
+    from roomlight.core.io import read_panorama
+    from roomlight.demo import bundled_prior_path
+    from roomlight.evaluation.photobench.runner import run_photo_benchmark
+    from roomlight.fitting.photo.camera import camera_rotation
+    from roomlight.fitting.photo.case import load_photo
+    from roomlight.prior.model.runs import load_run_model
+
+    prior = load_run_model(bundled_prior_path(), device="cpu")
+    res = tmp_path / "res"
+    summary = run_photo_benchmark(built, res, ("estimate",), preset="fast", model=prior, eval_spp=4, progress=False)
+    assert not summary.failed, summary.failed
+    rec = json.loads((res / "cases/photo-00000/estimate/result.json").read_text())
+    assert rec["materials"] is None and rec["insertion"] is None and "fit" not in rec["files"]
+    assert all(np.isfinite(rec["probes"][m]["psnr_ldr"]) for m in rec["probes"])
+    frame = np.asarray(read_panorama(res / "cases/photo-00000/estimate/recovered.exr").metadata["light_from_camera"])
+    case = load_photo(str(_case(built)))
+    np.testing.assert_allclose(frame[:3, :3], camera_rotation(case.pitch_deg, case.roll_deg), atol=1e-6)
+    np.testing.assert_allclose(frame[:3, 3], 0.0, atol=1e-9)

@@ -25,6 +25,7 @@ from roomlight.cli.common import FINITE, load_prior
               help="A prior with a view encoder (a model folder or training run) [default: the bundled prior].")
 @click.option("--refine", is_flag=True,
               help="Continue with a short fit of the light to the photograph's own pixels (a few seconds more).")
+# 40: roomlight.fitting.photo.estimate.REFINE_STEPS, written out (that module imports torch; the CLI starts without it)
 @click.option("--steps", type=click.IntRange(min=1), default=40, show_default=True,
               help="Steps of --refine.")
 @click.option("--quiet", is_flag=True, help="Only errors and notes.")

@@ -19,7 +19,7 @@ it runs, and how the report describes it. The registry's order is the row order 
 ``prior-zero``     ``prior`` from z = 0, on photos
 ``prior-view``     ``prior`` from the view encoder's start, on photos
 ``prior``          z + log-exposure (+ white balance) through the 2.5D area light (the paper's method)
-``estimate``       ``roomlight estimate``: the view encoder's room from one image, no depth (crop benchmark)
+``estimate``       ``roomlight estimate``: the view encoder's room from one image, no depth (crops, photos)
 ``estimate-refine`` the same, then fitted to the image's own pixels (``--refine``)
 ``prior-mean``     the prior's mean room, z = 0: nothing from the image (a reference)
 ``prior-ceiling``  the prior's best latent for the whole true room (its capacity; a reference)
@@ -61,7 +61,8 @@ class Method:
         model: the model family it fits: ``prior`` (the panoramic VAE, ``--model``), ``veni`` or
             ``veni-d`` (loaded by name, ``--set veni_model=`` / ``veni_d_model=``), or None.
         runs: where it runs (:data:`FIT`, :data:`PHOTO`, :data:`CROPS`).
-        default: whether a benchmark runs it when no ``--methods`` are given.
+        default: whether a benchmark runs it when no ``--methods`` are given ...
+        default_in: ... in these places only (None: wherever it runs).
         init: for photo variants of ``prior``, the fixed start of the latent fit (``fit-photo --init``).
         text: one sentence for a report's reader.
         label: (family, representation) for the cost table.
@@ -76,6 +77,11 @@ class Method:
     text: str
     label: tuple[str, str] = ("", "")
     init: str | None = None
+    default_in: frozenset | None = None
+
+    def is_default_in(self, where: str) -> bool:
+        """Whether a benchmark of ``where`` runs it when no ``--methods`` are given."""
+        return self.default and where in (self.default_in if self.default_in is not None else self.runs)
 
     @property
     def needs_prior(self) -> bool:
@@ -143,10 +149,12 @@ METHODS: tuple[Method, ...] = (
     Method("prior", "mesh", "latent", "prior", _BOTH, True,
            "the learned prior's latent (and an exposure) optimised; its decoding is a 2.5D area light",
            ("roomlight prior", "2.5D AL")),
-    Method("estimate", "mesh", "latent", "prior", _CROPS, True,
-           "roomlight estimate: the prior's view encoder reads the image alone (no depth) and decodes its room"),
-    Method("estimate-refine", "mesh", "latent", "prior", _CROPS, True,
-           "roomlight estimate --refine: the same, then the room fitted to the image's own pixels"),
+    Method("estimate", "mesh", "latent", "prior", _CROPS | _PHOTO, True,
+           "roomlight estimate: the prior's view encoder reads the image alone (no depth) and decodes its room",
+           default_in=_CROPS),
+    Method("estimate-refine", "mesh", "latent", "prior", _CROPS | _PHOTO, True,
+           "roomlight estimate --refine: the same, then the room fitted to the image's own pixels",
+           default_in=_CROPS),
     Method("prior-mean", "mesh", "mean", "prior", _CROPS, True,
            "not a fit: the prior's mean room (z = 0), the same for every image"),
     Method("prior-ceiling", "mesh", "truth-latent", "prior", _PHOTO, True,
@@ -176,7 +184,7 @@ def methods_for(where: str, *, fitted: bool | None = None, default: bool | None 
     """
     return tuple(m.name for m in METHODS if where in m.runs
                  and (fitted is None or fitted != m.is_reference)
-                 and (default is None or default == m.default))
+                 and (default is None or default == m.is_default_in(where)))
 
 
 def default_run(where: str) -> tuple[str, ...]:

@@ -79,6 +79,6 @@ def predict(method: str, crop: np.ndarray, model=None) -> np.ndarray:
         from roomlight.fitting.photo.estimate import estimate_light
 
         camera = PhotoCamera.from_fov(crop_camera_fov_x(), CROP_SIZE[1], CROP_SIZE[0])
-        est = estimate_light(crop_lin, camera, model, refine_steps=40 if method == "estimate-refine" else 0)
+        est = estimate_light(crop_lin, camera, model, refine_steps=REFINE_STEPS if method == "estimate-refine" else 0)
         return _turn_to_plus_z(np.asarray(est.light.radiance, np.float32))
     raise RoomlightError(f"unknown crop method {method!r}")

@@ -7,7 +7,9 @@ For each case (photo x method), in manifest order:
    ``oracle-envmap`` fit nothing and take the photo's oracle light as a 2.5D light or an env map;
    ``prior-ceiling`` takes the prior's latent fitted to that oracle panorama (the prior's ceiling);
    ``prior-view``, ``prior-samples`` and ``prior-zero`` are ``prior`` from a fixed start (``--init``);
-   ``naive-paste`` is a uniform light of the photo's mean colour;
+   ``naive-paste`` is a uniform light of the photo's mean colour; ``estimate`` and ``estimate-refine`` are
+   ``roomlight estimate`` (with and without ``--refine``) on the photo alone: no depth, no mask, the
+   camera's field of view and tilt from the case; they fit no materials and insert nothing;
 2. the probes are rendered at their true positions under the recovered light and scored against
    the ground truth (:mod:`roomlight.evaluation.photobench.scoring`), and the recovered materials against
    the true ones;
@@ -59,6 +61,8 @@ ORACLES = {m: method_record(m).light for m in methods_for(PHOTO, fitted=False) i
 #: (:mod:`roomlight.evaluation.photobench.ceiling`) and the naive paste. Their lights live in the oracle's frame.
 REFERENCES = methods_for(PHOTO, fitted=False)
 KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
+#: ``roomlight estimate`` on the photo alone, plain and refined.
+ESTIMATES = ("estimate", "estimate-refine")
 #: Without ``--methods``: the paper's method and the env-map baselines (VENI rows: by name).
 DEFAULT_METHODS = default_run(PHOTO)
 #: Samples per pixel of the scoring renders.
@@ -107,6 +111,9 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
 
         light = naive_light(case.source)
         fit_seconds = 0.0
+    elif case.method in ESTIMATES:
+        light = _estimate_light(case.source, model, refine=case.method == "estimate-refine")
+        fit_seconds = time.perf_counter() - t0
     else:
         out = fit(case.source, case.method, preset, cdir / "fit", model=model, progress=progress,
                   overrides=overrides)
@@ -119,11 +126,14 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
                    metadata={"emitter_kind": light.kind, "light_from_camera": light.frame.tolist()})
     t1 = time.perf_counter()
     renders: dict = {}
-    scores = score_light(truth, light, eval_spp, renders=renders, given_depth=case.method not in REFERENCES)
+    # the probes stand where the photo's given depth puts them for the lights fitted with that depth
+    uses_depth = case.method not in REFERENCES and case.method not in ESTIMATES
+    scores = score_light(truth, light, eval_spp, renders=renders, given_depth=uses_depth)
     for m, img in renders.items():
         write_rgb_exr(cdir / f"probes_{m}.exr", img)
-    outside = probes_outside(truth, light, given_depth=case.method not in REFERENCES)
-    insertion = _insertion(case, light, truth, fitted_materials, preset, overrides, eval_spp, cdir)
+    outside = probes_outside(truth, light, given_depth=uses_depth)
+    insertion = None if case.method in ESTIMATES else _insertion(case, light, truth, fitted_materials, preset,
+                                                                   overrides, eval_spp, cdir)
     record = {"photo": case.item, "case_dir": str(Path(case.source).resolve()), "method": case.method,
               "emitter_kind": light.kind, "probes": scores, "materials": materials,
               "probes_outside": outside, "insertion": insertion,
@@ -132,10 +142,25 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
               "recovered_resolution": list(light.radiance.shape[:2]),
               "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
                         **({"insert": "insert.exr"} if insertion else {}),
-                        **({"fit": "fit"} if case.method not in REFERENCES else {})}}
+                        **({"fit": "fit"} if case.method in PHOTO_FIT_METHODS and case.method not in ESTIMATES
+                           else {})}}
     (cdir / "error.json").unlink(missing_ok=True)
     write_json(cdir / RESULT, record)
     return record
+
+
+def _estimate_light(case_dir, model, refine: bool) -> Light:
+    """``roomlight estimate``'s light for a photo case: its linear image clipped at 1 as a recording is, its
+    camera and tilt; its depth and mask left unused (the light's frame: camera -> room, no shift)."""
+    import numpy as np
+
+    from roomlight.fitting.photo.case import load_photo
+    from roomlight.fitting.photo.estimate import REFINE_STEPS, estimate_light
+
+    photo = load_photo(str(case_dir))
+    est = estimate_light(np.minimum(photo.image, 1.0), photo.intrinsics, model, photo.pitch_deg, photo.roll_deg,
+                         refine_steps=REFINE_STEPS if refine else 0)
+    return est.light
 
 
 def _insertion(case: Case, light, truth, fitted_materials, preset, overrides, spp: int, cdir: Path):

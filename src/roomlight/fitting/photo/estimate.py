@@ -31,13 +31,15 @@ import torch
 
 from roomlight.errors import InputFileError, RoomlightError
 
-__all__ = ["DEFAULT_FOV", "EYE_HEIGHT", "GUESS_DISTANCE", "exif_fov", "first_depth_guess", "Estimate",
+__all__ = ["DEFAULT_FOV", "REFINE_STEPS", "EYE_HEIGHT", "GUESS_DISTANCE", "exif_fov", "first_depth_guess", "Estimate",
            "estimate_light", "sphere_probes"]
 
 #: Horizontal field of view (degrees) assumed when neither the EXIF nor ``--fov`` gives one: a phone's
 #: main camera (26 mm equivalent: 69 degrees on the long side of a 4:3 frame) is the most common
 #: photograph; 60 sits between it and a standard lens.
 DEFAULT_FOV = 60.0
+#: Steps of ``--refine`` (Adam on z and the exposure against the photograph's pixels).
+REFINE_STEPS = 40
 #: The first depth guess: a floor this far below the camera (metres: a standing photographer's hand) ...
 EYE_HEIGHT = 1.5
 #: ... and everything else (walls, furniture, the floor beyond) this far away.
