@@ -120,3 +120,19 @@ def test_make_run_report_round_trip(tmp_path):
     bad = CliRunner().invoke(cli, ["bench", "run-crops", str(tmp_path / "set"), "--out", str(tmp_path / "x"),
                                    "--methods", "magic"])
     assert bad.exit_code != 0 and "magic" in bad.output and "Traceback" not in bad.output
+
+
+def test_estimate_rows_turn_the_bundled_prior_s_room_to_face_the_crop_and_refine_moves_it():
+    """``estimate`` and ``estimate-refine`` on one crop: a finite panorama at the benchmark's size from the
+    bundled prior, and the refined one differs from the plain one (it was fitted to the crop's pixels)."""
+    from roomlight.demo import bundled_prior_path
+    from roomlight.evaluation.crops.predict import predict
+    from roomlight.prior.model.runs import load_run_model
+
+    model = load_run_model(bundled_prior_path(), device="cpu")
+    yy, xx = np.mgrid[0:CROP_SIZE[0], 0:CROP_SIZE[1]]
+    crop = np.stack([xx / (CROP_SIZE[1] - 1), yy / (CROP_SIZE[0] - 1), np.full(xx.shape, 0.5)], -1).astype(np.float32)
+    plain, refined = predict("estimate", crop, model), predict("estimate-refine", crop, model)
+    assert plain.shape == refined.shape and plain.shape[1] == 2 * plain.shape[0] and plain.shape[2] == 3
+    assert np.isfinite(plain).all() and np.isfinite(refined).all() and plain.min() >= 0
+    assert float(np.abs(refined - plain).mean()) > 1e-3 * float(plain.mean())

@@ -13,6 +13,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from roomlight.cli.main import cli
+from roomlight.errors import RoomlightError
 from roomlight.fitting.photo.estimate import DEFAULT_FOV, exif_fov, first_depth_guess
 
 pytestmark = [pytest.mark.usefixtures("one_torch_thread")]
@@ -119,11 +120,7 @@ def test_the_light_in_the_photographs_directions_matches_its_pixels_and_refine_b
 
 def test_a_known_depth_replaces_the_guess_and_sets_the_room_s_size(tmp_path):
     """In a room twice the guess's size, the decoded room in the photograph's directions is about the guess's
-    size when the depth-trained encoder reads the guess and the true size with --depth. The depth-optional
-    encoder, reading the photograph without depth (estimate's default), judges the size from what it sees:
-    this small synthetic room, scaled up, it takes for a small one (measured: 0.31x the true size, the
-    guess 0.53x), so only its path is checked here; its accuracy is measured on rendered rooms
-    (benchmarks/view_encoder_depth.py, docs/results.md)."""
+    size without --depth and the true size with it."""
     from helpers_photo import bright_wall_room, make_tiny_photo
 
     from roomlight.core.geometry.equirect import sample_equirect
@@ -140,18 +137,18 @@ def test_a_known_depth_replaces_the_guess_and_sets_the_room_s_size(tmp_path):
     true_r = radial_distance(case.depth, case.intrinsics, case.depth_kind)
     rays = torch.from_numpy(_rays_room(case.intrinsics, case.pitch_deg, 0.0).reshape(-1, 3)).float()
 
-    def size_error(given, without_depth="auto"):
+    def size_error(given, without_depth="guess"):
         est = estimate_light(np.minimum(case.image, 1.0), case.intrinsics, model, case.pitch_deg, depth=given,
                              without_depth=without_depth)
         seen = sample_equirect(torch.as_tensor(est.light.depth)[None, None], rays)[0, 0].numpy().reshape(true_r.shape)
         return float(np.median(np.abs(np.log(seen / true_r)))), est.info["depth"]
 
-    (guessed, how_g), (withheld, how_w) = size_error(None, "guess"), size_error(None)
-    given, how = size_error(true_r.astype(np.float32))
-    assert "guess" in how_g and how_w.get("withheld") and how.get("given")
+    (guessed, how_g), (given, how) = size_error(None), size_error(true_r.astype(np.float32))
+    assert "guess" in how_g and how.get("given")
     assert guessed > 0.4          # the guess (3.5 m) against a 6 m room
     assert given < 0.15 < guessed
-    assert given < min(withheld, guessed)
+    with pytest.raises(RoomlightError, match="depth-optional"):   # the bundled prior has none
+        size_error(None, "withheld")
     # and from the command line, one line for a depth of the wrong size
     np.save(tmp_path / "small.npy", np.ones((4, 4), np.float32))
     from roomlight.core.color import linear_to_srgb
@@ -169,3 +166,32 @@ def test_the_command_s_refine_steps_are_the_library_s():
 
     steps = next(p for p in command.params if p.name == "steps")
     assert steps.default == REFINE_STEPS
+
+
+def test_a_prior_with_a_depth_optional_encoder_reads_the_photo_without_depth_on_request(photo_png, tmp_path):
+    """--depth-optional-encoder: the prior's view_encoder_depth_optional/ reads the photograph with the depth
+    channel empty (no depth is read: result.json says so); without the flag the guess is read as before."""
+    import shutil
+
+    from roomlight.demo import bundled_prior_path
+    from roomlight.prior.model.runs import load_run_model
+    from roomlight.prior.model.view_encoder import DEPTH_OPTIONAL_DIR, ViewEncoder
+    from roomlight.prior.model.weights import file_sha256
+
+    prior_dir = tmp_path / "prior"
+    shutil.copytree(bundled_prior_path(), prior_dir)
+    model = load_run_model(prior_dir, device="cpu")
+    enc = ViewEncoder.from_prior(model)          # untrained, but marked as trained with depth withheld
+    enc.prior_sha256 = file_sha256(prior_dir / "model.safetensors")
+    enc.save_pretrained(prior_dir / DEPTH_OPTIONAL_DIR, training_config={"depth_dropout": 0.5})
+    png, _ = photo_png
+    runs = {}
+    for flag in ([], ["--depth-optional-encoder"]):
+        out = tmp_path / f"e{len(flag)}"
+        r = CliRunner().invoke(cli, ["estimate", str(png), "--fov", "70", "--model", str(prior_dir), "--out", str(out),
+                                     *flag])
+        assert r.exit_code == 0, r.output
+        runs[bool(flag)] = json.loads((out / "result.json").read_text())
+    assert runs[True]["depth"] == {"withheld": True, "encoder": "view_encoder_depth_optional"}
+    assert "guess" in runs[False]["depth"]
+    assert runs[True]["view_log_exposure"] != runs[False]["view_log_exposure"]

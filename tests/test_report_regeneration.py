@@ -22,7 +22,8 @@ RESULTS = Path(__file__).parents[1] / "benchmarks" / "results"
                                              ("photos24-reflectance-prior", "report-photos"),
                                              ("wide24-reflectance-prior", "report-photos"),
                                              ("wide24-room-bound", "report-photos"),
-                                             ("photos24-room-bound", "report-photos")])
+                                             ("photos24-room-bound", "report-photos"),
+                                             ("wide24-estimate", "report-photos")])
 def test_a_committed_report_is_rebuilt_byte_for_byte(folder, command, tmp_path):
     src = RESULTS / folder
     work = tmp_path / folder

@@ -23,18 +23,21 @@ from roomlight.cli.common import FINITE, load_prior
               help="What --depth holds: distance along the optical axis or from the camera centre.")
 @click.option("--model", type=click.Path(), default=None,
               help="A prior with a view encoder (a model folder or training run) [default: the bundled prior].")
+@click.option("--depth-optional-encoder", "depth_optional", is_flag=True,
+              help="Without --depth, read the photograph with the prior's depth-optional view encoder "
+                   "(view_encoder_depth_optional/, trained with `train-view-encoder --set depth_dropout=0.5`) "
+                   "instead of the guess; it judges the room's size from the photograph (docs/photo.md).")
 @click.option("--refine", is_flag=True,
               help="Continue with a short fit of the light to the photograph's own pixels (a few seconds more).")
 # 40: roomlight.fitting.photo.estimate.REFINE_STEPS, written out (that module imports torch; the CLI starts without it)
 @click.option("--steps", type=click.IntRange(min=1), default=40, show_default=True,
               help="Steps of --refine.")
 @click.option("--quiet", is_flag=True, help="Only errors and notes.")
-def command(photo, out_dir, fov, pitch, roll, depth, depth_kind, model, refine, steps, quiet):
+def command(photo, out_dir, fov, pitch, roll, depth, depth_kind, model, depth_optional, refine, steps, quiet):
     """Recover the room's light from PHOTO alone: a JPEG, PNG or linear EXR; no depth, no mask.
 
     The field of view comes from the EXIF focal length when the file has one (else --fov, else
-    60 degrees, with a note). Without --depth the prior's depth-optional view encoder reads the
-    photograph and judges the room's size from it; a prior without one reads it with a guessed depth
+    60 degrees, with a note). The prior's view encoder reads the photograph with a guessed depth
     (a floor 1.5 m below the camera, the rest 3.5 m away; docs/photo.md, "From any photograph").
 
     \b
@@ -73,7 +76,7 @@ def command(photo, out_dir, fov, pitch, roll, depth, depth_kind, model, refine, 
         radial = radial_distance(d, camera, depth_kind).astype(np.float32)
     prior, model_path = load_prior(model, "estimate", device="cuda" if torch.cuda.is_available() else "cpu")
     est = estimate_light(np.minimum(image, 1.0), camera, prior, pitch, roll, refine_steps=steps if refine else 0,
-                         depth=radial)
+                         depth=radial, without_depth="withheld" if depth_optional else "guess")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rad, depth = est.light.to_numpy()

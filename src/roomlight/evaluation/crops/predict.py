@@ -76,7 +76,7 @@ def predict(method: str, crop: np.ndarray, model=None) -> np.ndarray:
         return rad[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
     if method in ("estimate", "estimate-refine"):
         from roomlight.fitting.photo.camera import PhotoCamera
-        from roomlight.fitting.photo.estimate import estimate_light
+        from roomlight.fitting.photo.estimate import REFINE_STEPS, estimate_light
 
         camera = PhotoCamera.from_fov(crop_camera_fov_x(), CROP_SIZE[1], CROP_SIZE[0])
         est = estimate_light(crop_lin, camera, model, refine_steps=REFINE_STEPS if method == "estimate-refine" else 0)

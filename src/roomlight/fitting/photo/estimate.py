@@ -1,14 +1,15 @@
 """A room's light from one ordinary photograph, in seconds: no depth map, no mask (``roomlight estimate``).
 
 What a photograph alone gives: its pixels and, from its EXIF, its field of view. The prior's view
-encoder reads what the photograph shows lifted onto the sphere around the camera. Without a depth map
-the prior's depth-optional view encoder (``view_encoder_depth_optional/``, trained with depth withheld
-from half its views) reads it with the depth channel empty and judges the room's size from what it sees.
-A prior without one falls back on its depth-trained encoder and a geometric guess: a floor ``EYE_HEIGHT``
+encoder reads what the photograph shows lifted onto the sphere around the camera, with the depth of every
+seen pixel, which an ordinary photograph lacks. A geometric guess stands in for it: a floor ``EYE_HEIGHT``
 below the camera where a pixel looks down at it, everything else ``GUESS_DISTANCE`` away. (Feeding the
-decoded room's own depth back to that encoder does not find the true depth: the decoded room reproduces
-the depth it was given to within 1 % in the seen directions, so the guess sets the room's size.) A depth
-map, when given, is read by the depth-trained encoder.
+decoded room's own depth back to the encoder does not find the true depth: the decoded room reproduces
+the depth it was given to within 1 % in the seen directions, so the guess sets the room's size.)
+``without_depth="withheld"`` reads the photograph instead with a prior's depth-optional view encoder
+(``view_encoder_depth_optional/``, trained with depth withheld from half its views), which judges the
+room's size from what it sees; measured, it makes rooms too small for the objects in a photograph
+(docs/results.md), so the guess is the default.
 The encoder predicts the room's latent z and its exposure; the camera is the decoded room's centre (the
 view encoder decodes the room around the camera, in the photograph's metres), so the light's frame is the
 camera's orientation (pitch and roll) and no shift.
@@ -135,7 +136,7 @@ def _rays_room(camera, pitch: float, roll: float) -> np.ndarray:
 
 def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: float = 0.0, refine_steps: int = 0,
                    refine_lr: float = 0.05, refine_pixels: int = 4096, tau: float = 0.99, seed: int = 0,
-                   depth: np.ndarray | None = None, without_depth: str = "auto") -> Estimate:
+                   depth: np.ndarray | None = None, without_depth: str = "guess") -> Estimate:
     """The light of one photograph (module docstring).
 
     Args:
@@ -145,9 +146,9 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
         pitch, roll: the camera's orientation in degrees (level: 0, 0).
         refine_steps: steps of the fit to the photograph's pixels (0: none).
         depth: (H, W) the photograph's radial depth in metres when known.
-        without_depth: with no ``depth``, how the view encoder reads the photograph: ``auto`` (the
-            depth-optional encoder when the prior has one, else the guess), ``withheld`` (that encoder,
-            required) or ``guess`` (the depth-trained encoder and the geometric guess).
+        without_depth: with no ``depth``, how the photograph is read: ``guess`` (the depth-trained view
+            encoder and the geometric guess) or ``withheld`` (the prior's depth-optional view encoder with
+            no depth at all; the prior must have one).
     """
     from roomlight.core.light import Light
     from roomlight.fitting.photo.camera import camera_rotation
@@ -160,14 +161,14 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
         raise RoomlightError("estimate needs a prior that decodes depth (a 2.5D prior, not an env-map one)")
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    if without_depth not in ("auto", "withheld", "guess"):
-        raise RoomlightError(f"without_depth must be auto, withheld or guess, not {without_depth!r}")
+    if without_depth not in ("withheld", "guess"):
+        raise RoomlightError(f"without_depth must be guess or withheld, not {without_depth!r}")
     reader = getattr(model, "depth_optional_view_encoder", None)
     if depth is None and without_depth == "withheld" and reader is None:
         raise RoomlightError("this prior has no depth-optional view encoder (view_encoder_depth_optional/ beside "
                              "its weights; train one with `roomlight train-view-encoder --set depth_dropout=0.5`)")
     rays = _rays_room(camera, pitch, roll)
-    mode = "given" if depth is not None else "withheld" if (reader is not None and without_depth != "guess") else "guess"
+    mode = "given" if depth is not None else without_depth
     # without depth the pixels are lifted at the guess's distances: only their directions matter then
     lifted = np.asarray(depth, np.float32) if mode == "given" else first_depth_guess(rays)
     dev = next(model.parameters()).device
