@@ -16,7 +16,7 @@ interval, and every score's noise floor beside it:
 - ``spp``: the composite's samples per pixel;
 - ``true albedo`` (``--albedo``): the local scene's albedo taken from the room itself (each pixel's
   surface's diffuse reflectance, 4 × 4 rays per pixel) instead of estimated from the photograph under the
-  light (the original suite's rooms only).
+  light (procedural rooms only).
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
          [--hi-spp 256] [--quick] [--albedo] [--out FILE.json]
@@ -39,19 +39,21 @@ SCORES = ("psnr_ldr", "object_psnr_ldr", "shadow_psnr_ldr")
 def truth_noise(case_dir: Path, seed_offset: int = 1000):
     """A perfect differential render with other samples: the photo plus (truth - photo) both rendered
     again with another seed, and the new objects' own pixels from that truth. Scored against the
-    truth, it is the noise floor of every score (the original suite's rooms only)."""
-    from roomlight.datagen.synth.rooms import generate_room
+    truth, it is the noise floor of every score (procedural rooms as built, repainted or not; not the sets
+    under a captured panorama)."""
     from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.builder import room_of_record
     from roomlight.evaluation.photobench.insertion import read_insert_truth, render_insert_truth
     from roomlight.evaluation.photobench.roomscene import RoomScenes
     from roomlight.evaluation.photobench.scoring import load_truth
 
     record = json.loads((case_dir / fmt.RECORD).read_text())
-    if "captured" in record:
+    room = room_of_record(record)
+    if room is None:
         return None
     truth = load_truth(case_dir)
     _, _, inserts = read_insert_truth(case_dir / fmt.TRUTH)
-    scenes = RoomScenes(generate_room(record["room_seed"]), int(record["config"]["max_depth"]))
+    scenes = RoomScenes(room, int(record["config"]["max_depth"]))
     meshes = {o.id: o.mitsuba_mesh() for o in truth.objects}
     from roomlight.evaluation.photobench.tracing import trace_image
 
@@ -69,17 +71,18 @@ def true_albedo(case_dir: Path, supersample: int = 4):
     import drjit as dr
 
     from roomlight.core.render.variant import mitsuba
-    from roomlight.datagen.synth.rooms import generate_room
     from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.builder import room_of_record
     from roomlight.evaluation.photobench.roomscene import RoomScenes
     from roomlight.evaluation.photobench.scoring import load_truth
     from roomlight.evaluation.photobench.tracing import camera_rays
 
     record = json.loads((case_dir / fmt.RECORD).read_text())
-    if "captured" in record:
+    room = room_of_record(record)
+    if room is None:
         return None
     truth = load_truth(case_dir)
-    scene = RoomScenes(generate_room(record["room_seed"]), int(record["config"]["max_depth"])).scene(
+    scene = RoomScenes(room, int(record["config"]["max_depth"])).scene(
         {o.id: o.mitsuba_mesh() for o in truth.objects})
     mi, cam, s = mitsuba(), truth.camera, supersample
     jj, ii = np.meshgrid(np.arange(cam.width * s), np.arange(cam.height * s))

@@ -99,7 +99,11 @@ def test_a_wide_build_is_what_its_plans_ask_for(tmp_path):
     from roomlight.datagen.synth.rooms import generate_room
     from roomlight.evaluation.photobench.builder import make_photo_benchmark
     from roomlight.evaluation.photobench.captured import FAR_DEPTH
-    from roomlight.evaluation.photobench.case import read_depth_exr
+    from roomlight.evaluation.photobench.builder import photo_seeds, room_of_record
+    from roomlight.evaluation.photobench.case import read_depth_exr, read_rgb_exr
+    from roomlight.evaluation.photobench.roomscene import RoomScenes
+    from roomlight.evaluation.photobench.scoring import load_truth
+    from roomlight.evaluation.photobench.tracing import trace_image
 
     lights = _captured_panorama(tmp_path / "lights")
     cfg = suite_config("wide", n=3, width=128, height=96, spp=8, probe_spp=16, oracle_height=16, oracle_spp=8,
@@ -123,6 +127,16 @@ def test_a_wide_build_is_what_its_plans_ask_for(tmp_path):
             area = sum((c[2] - c[0]) * (c[3] - c[1]) for c in room.cells)
             assert {"small": area < 9.0, "large": area > 40.0 or room.shell == "large"}[plan.room_kind]
             assert "captured" not in rec
+            # the room as built (repainted and relit by its plan) renders the photo again bit for bit
+            truth = load_truth(photo)
+            scenes = RoomScenes(room_of_record(rec), cfg.max_depth)
+            meshes = {o.id: o.mitsuba_mesh() for o in truth.objects}
+            again = trace_image(scenes.scene(meshes), truth.camera, cfg.spp, photo_seeds(cfg, i)["photo"]) * truth.exposure
+            assert np.array_equal(again, read_rgb_exr(photo / "image.exr"))
+            if rec.get("edits"):   # and the seed's room alone does not
+                plain = RoomScenes(room, cfg.max_depth).scene(meshes)
+                assert not np.array_equal(trace_image(plain, truth.camera, cfg.spp, photo_seeds(cfg, i)["photo"])
+                                          * truth.exposure, again)
         else:
             assert rec["captured"]["panorama"] == "sky.exr" and rec["room"]["type"] == "captured"
             # the camera sees the captured sky: the depth's far value, and light sources in the frame

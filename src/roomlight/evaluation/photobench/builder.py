@@ -49,7 +49,7 @@ from roomlight.evaluation.photobench.staging import StagingError, palette, stage
 
 __all__ = ["MANIFEST", "MANIFEST_VERSION", "ROOMS_PER_PHOTO", "photo_name", "build_photo", "update_depth",
            "render_probe_truth", "probe_window",
-           "make_photo_benchmark", "read_photo_manifest", "photo_seeds", "PhotoBuildError"]
+           "make_photo_benchmark", "read_photo_manifest", "photo_seeds", "room_of_record", "PhotoBuildError"]
 
 MANIFEST = "manifest.json"
 MANIFEST_VERSION = 1
@@ -99,6 +99,25 @@ def _room(config: PhotoBenchConfig, rng: np.random.Generator, plan):
         if room_matches(room, plan.room_kind):
             return room, edit_room(room, plan, np.random.default_rng([room.seed, _SALT_ROOM]))
     raise PhotoBuildError(f"no {plan.room_kind!r} room among {ROOM_SEARCH} generated rooms")
+
+
+def room_of_record(record: dict):
+    """The generated room a photo was built in, from its record (``truth/photo.json``): the room of its seed,
+    repainted and relit as its plan said (the wide suite), so that it can be rendered again. None for a set
+    under a captured panorama."""
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.evaluation.photobench.variety import Plan, edit_room
+
+    if "captured" in record:
+        return None
+    room = generate_room(int(record["room_seed"]))
+    plan = record.get("plan")
+    if plan is not None:
+        edits = edit_room(room, Plan(**plan), np.random.default_rng([room.seed, _SALT_ROOM]))
+        if json.loads(json.dumps(edits)) != record.get("edits", {}):
+            raise PhotoBuildError(f"room {room.seed}: its edits rebuilt ({edits}) are not the record's "
+                                  f"({record.get('edits', {})}); the generator changed since the photo was built")
+    return room
 
 
 def _stage(config: PhotoBenchConfig, index: int, captured_lights=None):
