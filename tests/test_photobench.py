@@ -788,3 +788,7 @@ def test_the_estimate_rows_read_the_photo_alone_with_the_camera_at_the_light_s_c
     case = load_photo(str(_case(built)))
     np.testing.assert_allclose(frame[:3, :3], camera_rotation(case.pitch_deg, case.roll_deg), atol=1e-6)
     np.testing.assert_allclose(frame[:3, 3], 0.0, atol=1e-9)
+    # the depth-optional row needs a prior that has that encoder: the bundled one has none, one line says so
+    failed = run_photo_benchmark(built, res, ("estimate-depth-optional",), preset="fast", model=prior, eval_spp=4,
+                                 progress=False).failed
+    assert len(failed) == 1 and "depth-optional view encoder" in next(iter(failed.values())), failed

@@ -34,7 +34,7 @@ def test_a_committed_report_is_rebuilt_byte_for_byte(folder, command, tmp_path):
     assert rebuilt == (src / "report.md").read_bytes(), f"{folder}: the rebuilt report differs from the committed one"
 
 
-@pytest.mark.parametrize("folder", ["crops-rooms", "crops-blender"])
+@pytest.mark.parametrize("folder", ["crops-rooms", "crops-blender", "crops-rooms-estimate-do"])
 def test_a_committed_crop_report_is_rebuilt_byte_for_byte(folder, tmp_path):
     work = tmp_path / folder
     shutil.copytree(RESULTS / folder, work)

@@ -21,6 +21,7 @@ it runs, and how the report describes it. The registry's order is the row order 
 ``prior``          z + log-exposure (+ white balance) through the 2.5D area light (the paper's method)
 ``estimate``       ``roomlight estimate``: the view encoder's room from one image, no depth (crops, photos)
 ``estimate-refine`` the same, then fitted to the image's own pixels (``--refine``)
+``estimate-depth-optional`` the same read by the prior's depth-optional view encoder, no depth at all
 ``prior-mean``     the prior's mean room, z = 0: nothing from the image (a reference)
 ``prior-ceiling``  the prior's best latent for the whole true room (its capacity; a reference)
 ``oracle-envmap``  the true room's panorama shown at infinity (a reference)
@@ -155,6 +156,9 @@ METHODS: tuple[Method, ...] = (
     Method("estimate-refine", "mesh", "latent", "prior", _CROPS | _PHOTO, True,
            "roomlight estimate --refine: the same, then the room fitted to the image's own pixels",
            default_in=_CROPS),
+    Method("estimate-depth-optional", "mesh", "latent", "prior", _CROPS | _PHOTO, False,
+           "roomlight estimate --depth-optional-encoder: the prior's depth-optional view encoder reads the image "
+           "with no depth at all"),
     Method("prior-mean", "mesh", "mean", "prior", _CROPS, True,
            "not a fit: the prior's mean room (z = 0), the same for every image"),
     Method("prior-ceiling", "mesh", "truth-latent", "prior", _PHOTO, True,

@@ -74,11 +74,13 @@ def predict(method: str, crop: np.ndarray, model=None) -> np.ndarray:
         with torch.no_grad():
             rad, _ = model.decode(torch.zeros(1, model.config.latent_dim, device=next(model.parameters()).device))
         return rad[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
-    if method in ("estimate", "estimate-refine"):
+    from roomlight.fitting.photo.estimate import ESTIMATE_ROWS
+
+    if method in ESTIMATE_ROWS:
         from roomlight.fitting.photo.camera import PhotoCamera
-        from roomlight.fitting.photo.estimate import REFINE_STEPS, estimate_light
+        from roomlight.fitting.photo.estimate import estimate_light
 
         camera = PhotoCamera.from_fov(crop_camera_fov_x(), CROP_SIZE[1], CROP_SIZE[0])
-        est = estimate_light(crop_lin, camera, model, refine_steps=REFINE_STEPS if method == "estimate-refine" else 0)
+        est = estimate_light(crop_lin, camera, model, **ESTIMATE_ROWS[method])
         return _turn_to_plus_z(np.asarray(est.light.radiance, np.float32))
     raise RoomlightError(f"unknown crop method {method!r}")

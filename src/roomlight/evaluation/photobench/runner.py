@@ -7,8 +7,9 @@ For each case (photo x method), in manifest order:
    ``oracle-envmap`` fit nothing and take the photo's oracle light as a 2.5D light or an env map;
    ``prior-ceiling`` takes the prior's latent fitted to that oracle panorama (the prior's ceiling);
    ``prior-view``, ``prior-samples`` and ``prior-zero`` are ``prior`` from a fixed start (``--init``);
-   ``naive-paste`` is a uniform light of the photo's mean colour; ``estimate`` and ``estimate-refine`` are
-   ``roomlight estimate`` (with and without ``--refine``) on the photo alone: no depth, no mask, the
+   ``naive-paste`` is a uniform light of the photo's mean colour; ``estimate``, ``estimate-refine`` and
+   ``estimate-depth-optional`` are ``roomlight estimate`` (plain, ``--refine``, ``--depth-optional-encoder``)
+   on the photo alone: no depth, no mask, the
    camera's field of view and tilt from the case; they fit no materials and insert nothing;
 2. the probes are rendered at their true positions under the recovered light and scored against
    the ground truth (:mod:`roomlight.evaluation.photobench.scoring`), and the recovered materials against
@@ -62,7 +63,7 @@ ORACLES = {m: method_record(m).light for m in methods_for(PHOTO, fitted=False) i
 REFERENCES = methods_for(PHOTO, fitted=False)
 KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
 #: ``roomlight estimate`` on the photo alone, plain and refined.
-ESTIMATES = ("estimate", "estimate-refine")
+ESTIMATES = ("estimate", "estimate-refine", "estimate-depth-optional")
 #: Without ``--methods``: the paper's method and the env-map baselines (VENI rows: by name).
 DEFAULT_METHODS = default_run(PHOTO)
 #: Samples per pixel of the scoring renders.
@@ -112,7 +113,7 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
         light = naive_light(case.source)
         fit_seconds = 0.0
     elif case.method in ESTIMATES:
-        light = _estimate_light(case.source, model, refine=case.method == "estimate-refine")
+        light = _estimate_light(case.source, model, case.method)
         fit_seconds = time.perf_counter() - t0
     else:
         out = fit(case.source, case.method, preset, cdir / "fit", model=model, progress=progress,
@@ -149,17 +150,17 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
     return record
 
 
-def _estimate_light(case_dir, model, refine: bool) -> Light:
+def _estimate_light(case_dir, model, row: str) -> Light:
     """``roomlight estimate``'s light for a photo case: its linear image clipped at 1 as a recording is, its
     camera and tilt; its depth and mask left unused (the light's frame: camera -> room, no shift)."""
     import numpy as np
 
     from roomlight.fitting.photo.case import load_photo
-    from roomlight.fitting.photo.estimate import REFINE_STEPS, estimate_light
+    from roomlight.fitting.photo.estimate import ESTIMATE_ROWS, estimate_light
 
     photo = load_photo(str(case_dir))
     est = estimate_light(np.minimum(photo.image, 1.0), photo.intrinsics, model, photo.pitch_deg, photo.roll_deg,
-                         refine_steps=REFINE_STEPS if refine else 0)
+                         **ESTIMATE_ROWS[row])
     return est.light
 
 

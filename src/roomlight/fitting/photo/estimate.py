@@ -32,7 +32,7 @@ import torch
 
 from roomlight.errors import InputFileError, RoomlightError
 
-__all__ = ["DEFAULT_FOV", "REFINE_STEPS", "EYE_HEIGHT", "GUESS_DISTANCE", "exif_fov", "first_depth_guess", "Estimate",
+__all__ = ["DEFAULT_FOV", "REFINE_STEPS", "ESTIMATE_ROWS", "EYE_HEIGHT", "GUESS_DISTANCE", "exif_fov", "first_depth_guess", "Estimate",
            "estimate_light", "sphere_probes"]
 
 #: Horizontal field of view (degrees) assumed when neither the EXIF nor ``--fov`` gives one: a phone's
@@ -41,6 +41,11 @@ __all__ = ["DEFAULT_FOV", "REFINE_STEPS", "EYE_HEIGHT", "GUESS_DISTANCE", "exif_
 DEFAULT_FOV = 60.0
 #: Steps of ``--refine`` (Adam on z and the exposure against the photograph's pixels).
 REFINE_STEPS = 40
+#: The benchmark rows of ``roomlight estimate`` (photo and crop benchmarks): name -> estimate_light's
+#: keyword arguments (the command's --refine and --depth-optional-encoder).
+ESTIMATE_ROWS = {"estimate": {"refine_steps": 0, "without_depth": "guess"},
+                 "estimate-refine": {"refine_steps": REFINE_STEPS, "without_depth": "guess"},
+                 "estimate-depth-optional": {"refine_steps": 0, "without_depth": "withheld"}}
 #: The first depth guess: a floor this far below the camera (metres: a standing photographer's hand) ...
 EYE_HEIGHT = 1.5
 #: ... and everything else (walls, furniture, the floor beyond) this far away.
@@ -178,9 +183,12 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
         else:
             z, log_exposure, about = view_latent(model, _case(image, camera, lifted, pitch, roll))
     timings["view_encoder"] = time.perf_counter() - t0
-    depth_info = {"given": {"given": True, "median_m": round(float(np.median(lifted)), 4)},
-                  "withheld": {"withheld": True, "encoder": "view_encoder_depth_optional"},
-                  "guess": {"guess": {"eye_height_m": EYE_HEIGHT, "distance_m": GUESS_DISTANCE}}}[mode]
+    if mode == "given":
+        depth_info = {"given": True, "median_m": round(float(np.median(lifted)), 4)}
+    elif mode == "withheld":
+        depth_info = {"withheld": True, "encoder": "view_encoder_depth_optional"}
+    else:
+        depth_info = {"guess": {"eye_height_m": EYE_HEIGHT, "distance_m": GUESS_DISTANCE}}
     info: dict = {"depth": depth_info, "seen_fraction": about["seen_fraction"],
                   "view_log_exposure": round(log_exposure, 4)}
     if refine_steps > 0:
