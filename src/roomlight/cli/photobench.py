@@ -98,9 +98,11 @@ def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, f
 @click.option("--methods", default=None,
               help=f"Comma-separated methods [default: {','.join(DEFAULT_METHODS)}]; also oracle and oracle-envmap "
                    "(the photo's room captured at the probes, as a 2.5D light or at infinity: references), "
-                   "prior-ceiling (the prior's latent fitted to that room: the prior's own ceiling), and "
+                   "prior-ceiling (the prior's latent fitted to that room: the prior's own ceiling), "
                    "prior-view, prior-samples, prior-zero (the prior's fit from a fixed start, as fit-photo --init), "
-                   "and naive-paste (a uniform light of the photo's mean colour, its inserted objects pasted alone).")
+                   "naive-paste (a uniform light of the photo's mean colour, its inserted objects pasted alone), "
+                   "and estimate, estimate-refine, estimate-depth-optional (roomlight estimate on the photo alone: "
+                   "no depth, no mask).")
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior for the prior methods [default: the prior bundled with roomlight].")
 @click.option("--preset", default="paper", show_default=True,
