@@ -36,27 +36,33 @@ import numpy as np
 SCORES = ("psnr_ldr", "object_psnr_ldr", "shadow_psnr_ldr")
 
 
-def truth_noise(case_dir: Path, seed_offset: int = 1000):
-    """A perfect differential render with other samples: the photo plus (truth - photo) both rendered
-    again with another seed, and the new objects' own pixels from that truth. Scored against the
-    truth, it is the noise floor of every score (procedural rooms as built, repainted or not; not the sets
-    under a captured panorama)."""
+def photo_room(case_dir: Path, truth):
+    """(record, the room's scenes, the photo's objects as meshes) of a photo built in a procedural room (as
+    built: repainted or not), or None for a set under a captured panorama."""
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.builder import room_of_record
-    from roomlight.evaluation.photobench.insertion import read_insert_truth, render_insert_truth
     from roomlight.evaluation.photobench.roomscene import RoomScenes
-    from roomlight.evaluation.photobench.scoring import load_truth
 
     record = json.loads((case_dir / fmt.RECORD).read_text())
     room = room_of_record(record)
     if room is None:
         return None
-    truth = load_truth(case_dir)
-    _, _, inserts = read_insert_truth(case_dir / fmt.TRUTH)
-    scenes = RoomScenes(room, int(record["config"]["max_depth"]))
-    meshes = {o.id: o.mitsuba_mesh() for o in truth.objects}
+    return record, RoomScenes(room, int(record["config"]["max_depth"])), {o.id: o.mitsuba_mesh() for o in truth.objects}
+
+
+def truth_noise(case_dir: Path, truth, seed_offset: int = 1000):
+    """A perfect differential render with other samples: the photo plus (truth - photo) both rendered
+    again with another seed, and the new objects' own pixels from that truth. Scored against the
+    truth, it is the noise floor of every score (procedural rooms only: None for a captured-light photo)."""
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.insertion import read_insert_truth, render_insert_truth
     from roomlight.evaluation.photobench.tracing import trace_image
 
+    built = photo_room(case_dir, truth)
+    if built is None:
+        return None
+    record, scenes, meshes = built
+    _, _, inserts = read_insert_truth(case_dir / fmt.TRUTH)
     spp, seed, k = int(record["config"]["spp"]), int(record["seeds"]["photo"]) + seed_offset, float(record["exposure"])
     again, labels = render_insert_truth(scenes, meshes, inserts, truth.camera, spp, seed,
                                         int(record["config"]["supersample"]), k)
@@ -65,25 +71,19 @@ def truth_noise(case_dir: Path, seed_offset: int = 1000):
     return np.where(labels[..., None] > 0, again, photo + (again - photo_again)).astype(np.float32)
 
 
-def true_albedo(case_dir: Path, supersample: int = 4):
+def true_albedo(case_dir: Path, truth, supersample: int = 4):
     """(H, W, 3) the diffuse reflectance of the surface each pixel of the photograph sees (its room and
     its objects; ``supersample``² rays per pixel on a regular grid), or None for a captured-light photo."""
     import drjit as dr
 
     from roomlight.core.render.variant import mitsuba
-    from roomlight.evaluation.photobench import case as fmt
-    from roomlight.evaluation.photobench.builder import room_of_record
-    from roomlight.evaluation.photobench.roomscene import RoomScenes
-    from roomlight.evaluation.photobench.scoring import load_truth
     from roomlight.evaluation.photobench.tracing import camera_rays
 
-    record = json.loads((case_dir / fmt.RECORD).read_text())
-    room = room_of_record(record)
-    if room is None:
+    built = photo_room(case_dir, truth)
+    if built is None:
         return None
-    truth = load_truth(case_dir)
-    scene = RoomScenes(room, int(record["config"]["max_depth"])).scene(
-        {o.id: o.mitsuba_mesh() for o in truth.objects})
+    _, scenes, meshes = built
+    scene = scenes.scene(meshes)
     mi, cam, s = mitsuba(), truth.camera, supersample
     jj, ii = np.meshgrid(np.arange(cam.width * s), np.arange(cam.height * s))
     x, y = (jj.ravel() + 0.5) / s, (ii.ravel() + 0.5) / s
@@ -132,7 +132,7 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                             **{k: r[k] for k in ("id", "distance_m", *SCORES, "region_pixels", "object_pixels",
                                                  "shadow_pixels")}})
 
-    again = truth_noise(case_dir)
+    again = truth_noise(case_dir, truth)
     if again is not None:
         add("truth noise", again)
     lights = {"oracle": (oracle_light(case_dir, "mesh", truth), true_mats),
@@ -142,7 +142,7 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
             got = fitted_light(res, case_dir.name, method)
             if got is not None:
                 lights[f"{method} ({res.name})"] = got
-    rho = true_albedo(case_dir) if albedo else None
+    rho = true_albedo(case_dir, truth) if albedo else None
     for name, (light, mats) in lights.items():
         variants = [("", dict(enclose=True, spp=spp))]
         if rho is not None:

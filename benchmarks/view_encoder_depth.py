@@ -14,7 +14,7 @@ the first encoder read with the true depth, with 95 % bootstrap intervals.
 
 Run: .venv/bin/python benchmarks/view_encoder_depth.py --data data/rooms64b \
          --encoder bundled=src/roomlight/assets/prior/view_encoder \
-         --encoder depth-optional=src/roomlight/assets/prior/view_encoder_depth_optional [--views 96] [--out FILE.json]
+         --encoder depth-optional=runs/view-encoder-l512-depth-optional/best [--views 96] [--out FILE.json]
 """
 
 from __future__ import annotations
@@ -109,9 +109,11 @@ def main(argv=None) -> None:
     for spec in args.encoder:
         name, folder = spec.split("=", 1)
         enc = ViewEncoder.from_pretrained(folder, prior.config).eval()
-        modes = ("true depth", "guess", "withheld") if enc.reads_without_depth else ("true depth", "guess")
-        for mode in modes:
-            rows[f"{name}, {mode}"] = score(prior, enc, views, mode.split()[0] if mode != "true depth" else "true")
+        modes = {"true depth": "true", "guess": "guess", "withheld": "withheld"}  # row label -> score()'s mode
+        if not enc.reads_without_depth:
+            del modes["withheld"]
+        for label, mode in modes.items():
+            rows[f"{name}, {label}"] = score(prior, enc, views, mode)
     base = next(iter(rows))
     print(f"{len(views)} validation views of {args.data}; mean over views, and paired against `{base}` "
           "(mean difference [95 % bootstrap interval])\n")

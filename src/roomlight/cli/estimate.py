@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from roomlight.cli.common import FINITE, load_prior
+from roomlight.fitting.photo.estimate import REFINE_STEPS
 
 
 @click.command("estimate")
@@ -29,8 +30,7 @@ from roomlight.cli.common import FINITE, load_prior
                    "instead of the guess; it judges the room's size from the photograph (docs/photo.md).")
 @click.option("--refine", is_flag=True,
               help="Continue with a short fit of the light to the photograph's own pixels (a few seconds more).")
-# 40: roomlight.fitting.photo.estimate.REFINE_STEPS, written out (that module imports torch; the CLI starts without it)
-@click.option("--steps", type=click.IntRange(min=1), default=40, show_default=True,
+@click.option("--steps", type=click.IntRange(min=1), default=REFINE_STEPS, show_default=True,
               help="Steps of --refine.")
 @click.option("--quiet", is_flag=True, help="Only errors and notes.")
 def command(photo, out_dir, fov, pitch, roll, depth, depth_kind, model, depth_optional, refine, steps, quiet):

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 from roomlight.errors import RoomlightError
 
-__all__ = ["Method", "METHODS", "method", "methods_for", "default_run", "method_names", "method_order", "needs_prior",
+__all__ = ["Method", "METHODS", "ESTIMATE_ROWS", "method", "methods_for", "default_run", "method_names", "method_order", "needs_prior",
            "is_reference", "check_methods", "FIT", "PHOTO", "CROPS"]
 
 #: Where a method runs: ``roomlight fit`` / ``bench run`` (a scene description's view) ...
@@ -170,6 +170,12 @@ METHODS: tuple[Method, ...] = (
 )
 
 _BY_NAME = {m.name: m for m in METHODS}
+
+#: The rows that are ``roomlight estimate`` rather than a fit (photo and crop benchmarks): name ->
+#: (whether it refines, ``--refine``; how it reads a photograph without depth: ``guess`` or ``withheld``,
+#: ``--depth-optional-encoder``).
+ESTIMATE_ROWS = {"estimate": (False, "guess"), "estimate-refine": (True, "guess"),
+                 "estimate-depth-optional": (False, "withheld")}
 
 
 def method(name: str) -> Method:

@@ -16,6 +16,7 @@ import numpy as np
 
 from roomlight.errors import RoomlightError
 from roomlight.evaluation.crops.protocol import CROP_SIZE, crop_camera_fov_x
+from roomlight.fitting.methods import ESTIMATE_ROWS
 
 __all__ = ["CROP_GAMMA", "crop_to_linear", "predict"]
 
@@ -74,13 +75,11 @@ def predict(method: str, crop: np.ndarray, model=None) -> np.ndarray:
         with torch.no_grad():
             rad, _ = model.decode(torch.zeros(1, model.config.latent_dim, device=next(model.parameters()).device))
         return rad[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
-    from roomlight.fitting.photo.estimate import ESTIMATE_ROWS
-
     if method in ESTIMATE_ROWS:
         from roomlight.fitting.photo.camera import PhotoCamera
-        from roomlight.fitting.photo.estimate import estimate_light
+        from roomlight.fitting.photo.estimate import estimate_light, estimate_row_settings
 
         camera = PhotoCamera.from_fov(crop_camera_fov_x(), CROP_SIZE[1], CROP_SIZE[0])
-        est = estimate_light(crop_lin, camera, model, **ESTIMATE_ROWS[method])
+        est = estimate_light(crop_lin, camera, model, **estimate_row_settings(method))
         return _turn_to_plus_z(np.asarray(est.light.radiance, np.float32))
     raise RoomlightError(f"unknown crop method {method!r}")

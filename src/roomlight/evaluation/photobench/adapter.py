@@ -15,15 +15,16 @@ import time
 from pathlib import Path
 
 from roomlight.errors import RoomlightError
-from roomlight.fitting.methods import PHOTO, methods_for
+from roomlight.fitting.methods import ESTIMATE_ROWS, PHOTO, methods_for
 from roomlight.fitting.methods import method as method_record
 
 __all__ = ["PHOTO_FIT_METHODS", "fit_photo_case"]
 
 #: Every method name the benchmark can fit: those of ``roomlight fit-photo`` and the variants of ``prior``
 #: with a fixed start (``fit-photo --init``), the rows that split the photo fit's gap. (``prior`` itself
-#: starts as fit-photo does by default: from the view encoder when the prior has one.)
-PHOTO_FIT_METHODS = methods_for(PHOTO, fitted=True)
+#: starts as fit-photo does by default: from the view encoder when the prior has one.) Not the rows of
+#: ``roomlight estimate``, which fit nothing through fit-photo.
+PHOTO_FIT_METHODS = tuple(m for m in methods_for(PHOTO, fitted=True) if m not in ESTIMATE_ROWS)
 
 
 def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, progress: bool = False,

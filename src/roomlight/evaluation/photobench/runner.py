@@ -43,7 +43,7 @@ from roomlight.errors import RoomlightError
 from roomlight.evaluation.harness.records import RESULT, RUN_FILE, check_run_file, write_json
 from roomlight.evaluation.harness.runner import Case, RunSummary, run_cases, shard_cases
 from roomlight.core.light import Light
-from roomlight.fitting.methods import PHOTO, check_methods, default_run, methods_for
+from roomlight.fitting.methods import ESTIMATE_ROWS, PHOTO, check_methods, default_run, methods_for
 from roomlight.fitting.methods import method as method_record
 from roomlight.evaluation.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.evaluation.photobench.ceiling import CEILING, prior_ceiling_light
@@ -61,9 +61,9 @@ ORACLES = {m: method_record(m).light for m in methods_for(PHOTO, fitted=False) i
 #: References that fit nothing from the photograph: the oracles, the prior's ceiling
 #: (:mod:`roomlight.evaluation.photobench.ceiling`) and the naive paste. Their lights live in the oracle's frame.
 REFERENCES = methods_for(PHOTO, fitted=False)
-KNOWN_METHODS = PHOTO_FIT_METHODS + REFERENCES
-#: ``roomlight estimate`` on the photo alone, plain and refined.
-ESTIMATES = ("estimate", "estimate-refine", "estimate-depth-optional")
+#: ``roomlight estimate`` on the photo alone (plain, refined, read by a depth-optional encoder).
+ESTIMATES = tuple(m for m in methods_for(PHOTO) if m in ESTIMATE_ROWS)
+KNOWN_METHODS = PHOTO_FIT_METHODS + ESTIMATES + REFERENCES
 #: Without ``--methods``: the paper's method and the env-map baselines (VENI rows: by name).
 DEFAULT_METHODS = default_run(PHOTO)
 #: Samples per pixel of the scoring renders.
@@ -127,12 +127,12 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
                    metadata={"emitter_kind": light.kind, "light_from_camera": light.frame.tolist()})
     t1 = time.perf_counter()
     renders: dict = {}
-    # the probes stand where the photo's given depth puts them for the lights fitted with that depth
-    uses_depth = case.method not in REFERENCES and case.method not in ESTIMATES
-    scores = score_light(truth, light, eval_spp, renders=renders, given_depth=uses_depth)
+    # fitted through fit-photo, with the photo's given depth: the probes stand where that depth puts them
+    fitted = case.method in PHOTO_FIT_METHODS
+    scores = score_light(truth, light, eval_spp, renders=renders, given_depth=fitted)
     for m, img in renders.items():
         write_rgb_exr(cdir / f"probes_{m}.exr", img)
-    outside = probes_outside(truth, light, given_depth=uses_depth)
+    outside = probes_outside(truth, light, given_depth=fitted)
     insertion = None if case.method in ESTIMATES else _insertion(case, light, truth, fitted_materials, preset,
                                                                    overrides, eval_spp, cdir)
     record = {"photo": case.item, "case_dir": str(Path(case.source).resolve()), "method": case.method,
@@ -143,8 +143,7 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
               "recovered_resolution": list(light.radiance.shape[:2]),
               "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
                         **({"insert": "insert.exr"} if insertion else {}),
-                        **({"fit": "fit"} if case.method in PHOTO_FIT_METHODS and case.method not in ESTIMATES
-                           else {})}}
+                        **({"fit": "fit"} if fitted else {})}}
     (cdir / "error.json").unlink(missing_ok=True)
     write_json(cdir / RESULT, record)
     return record
@@ -156,11 +155,11 @@ def _estimate_light(case_dir, model, row: str) -> Light:
     import numpy as np
 
     from roomlight.fitting.photo.case import load_photo
-    from roomlight.fitting.photo.estimate import ESTIMATE_ROWS, estimate_light
+    from roomlight.fitting.photo.estimate import estimate_light, estimate_row_settings
 
     photo = load_photo(str(case_dir))
     est = estimate_light(np.minimum(photo.image, 1.0), photo.intrinsics, model, photo.pitch_deg, photo.roll_deg,
-                         **ESTIMATE_ROWS[row])
+                         **estimate_row_settings(row))
     return est.light
 
 

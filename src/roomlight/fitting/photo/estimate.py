@@ -32,8 +32,8 @@ import torch
 
 from roomlight.errors import InputFileError, RoomlightError
 
-__all__ = ["DEFAULT_FOV", "REFINE_STEPS", "ESTIMATE_ROWS", "EYE_HEIGHT", "GUESS_DISTANCE", "exif_fov", "first_depth_guess", "Estimate",
-           "estimate_light", "sphere_probes"]
+__all__ = ["DEFAULT_FOV", "REFINE_STEPS", "EYE_HEIGHT", "GUESS_DISTANCE", "exif_fov", "first_depth_guess", "Estimate",
+           "estimate_light", "estimate_row_settings", "sphere_probes"]
 
 #: Horizontal field of view (degrees) assumed when neither the EXIF nor ``--fov`` gives one: a phone's
 #: main camera (26 mm equivalent: 69 degrees on the long side of a 4:3 frame) is the most common
@@ -41,11 +41,6 @@ __all__ = ["DEFAULT_FOV", "REFINE_STEPS", "ESTIMATE_ROWS", "EYE_HEIGHT", "GUESS_
 DEFAULT_FOV = 60.0
 #: Steps of ``--refine`` (Adam on z and the exposure against the photograph's pixels).
 REFINE_STEPS = 40
-#: The benchmark rows of ``roomlight estimate`` (photo and crop benchmarks): name -> estimate_light's
-#: keyword arguments (the command's --refine and --depth-optional-encoder).
-ESTIMATE_ROWS = {"estimate": {"refine_steps": 0, "without_depth": "guess"},
-                 "estimate-refine": {"refine_steps": REFINE_STEPS, "without_depth": "guess"},
-                 "estimate-depth-optional": {"refine_steps": 0, "without_depth": "withheld"}}
 #: The first depth guess: a floor this far below the camera (metres: a standing photographer's hand) ...
 EYE_HEIGHT = 1.5
 #: ... and everything else (walls, furniture, the floor beyond) this far away.
@@ -177,11 +172,10 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
     # without depth the pixels are lifted at the guess's distances: only their directions matter then
     lifted = np.asarray(depth, np.float32) if mode == "given" else first_depth_guess(rays)
     dev = next(model.parameters()).device
+    withheld = mode == "withheld"
     with torch.no_grad():
-        if mode == "withheld":
-            z, log_exposure, about = view_latent(model, _case(image, camera, lifted, pitch, roll), reader, depth=False)
-        else:
-            z, log_exposure, about = view_latent(model, _case(image, camera, lifted, pitch, roll))
+        z, log_exposure, about = view_latent(model, _case(image, camera, lifted, pitch, roll),
+                                             reader if withheld else None, depth=not withheld)
     timings["view_encoder"] = time.perf_counter() - t0
     if mode == "given":
         depth_info = {"given": True, "median_m": round(float(np.median(lifted)), 4)}
@@ -204,7 +198,16 @@ def estimate_light(image: np.ndarray, camera, model, pitch: float = 0.0, roll: f
     light = Light(radiance, dep[0, 0].float().cpu(), "mesh", frame)
     timings["total"] = time.perf_counter() - t0
     info["timings_s"] = {k: round(v, 3) for k, v in timings.items()}
-    return Estimate(light, z.detach().cpu(), float(log_exposure), None if mode == "withheld" else lifted, info)
+    return Estimate(light, z.detach().cpu(), float(log_exposure), None if withheld else lifted, info)
+
+
+def estimate_row_settings(name: str) -> dict:
+    """:func:`estimate_light`'s keyword arguments for a benchmark row of ``roomlight estimate``
+    (:data:`roomlight.fitting.methods.ESTIMATE_ROWS`)."""
+    from roomlight.fitting.methods import ESTIMATE_ROWS
+
+    refine, without_depth = ESTIMATE_ROWS[name]
+    return {"refine_steps": REFINE_STEPS if refine else 0, "without_depth": without_depth}
 
 
 def _refine(model, z0: torch.Tensor, s0: float, image: np.ndarray, rays: np.ndarray, steps: int, lr: float,

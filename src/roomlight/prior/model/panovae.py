@@ -69,9 +69,16 @@ class PanoVAE(SavedPrior, nn.Module):
 
     def set_view_encoder(self, encoder) -> None:
         """Attach a view encoder (None detaches); it must share this prior's architecture."""
-        if encoder is not None and encoder.config != self.config:
-            raise RoomlightError("set_view_encoder: the view encoder was made for another prior architecture")
-        self._view_encoder = () if encoder is None else (encoder.to("cpu").eval(),)
+        self._view_encoder = self._held_encoder(encoder, "set_view_encoder")
+
+    def _held_encoder(self, encoder, caller: str) -> tuple:
+        """``encoder`` as held beside the prior: () for None, else (it on the CPU, in eval mode), refused
+        when made for another prior architecture."""
+        if encoder is None:
+            return ()
+        if encoder.config != self.config:
+            raise RoomlightError(f"{caller}: the view encoder was made for another prior architecture")
+        return (encoder.to("cpu").eval(),)
 
     @property
     def depth_optional_view_encoder(self):
@@ -81,10 +88,7 @@ class PanoVAE(SavedPrior, nn.Module):
 
     def set_depth_optional_view_encoder(self, encoder) -> None:
         """Attach a depth-optional view encoder (None detaches); same rules as :meth:`set_view_encoder`."""
-        if encoder is not None and encoder.config != self.config:
-            raise RoomlightError("set_depth_optional_view_encoder: the view encoder was made for another prior "
-                                 "architecture")
-        self._depth_optional_view_encoder = () if encoder is None else (encoder.to("cpu").eval(),)
+        self._depth_optional_view_encoder = self._held_encoder(encoder, "set_depth_optional_view_encoder")
 
     # ------------------------------------------------------------------ normalised domain
     def _check_input(self, x: torch.Tensor, channels: int, what: str) -> None:
