@@ -13,13 +13,19 @@ interval, and every score's noise floor beside it:
   any fitted light of a results folder (``--results DIR``: its ``recovered.exr`` and fitted materials);
 - ``enclose``: the light's surface pushed behind the local scene (roomlight.core.emitter.enclose), or
   left where it is (the pipeline before that fix);
-- ``spp``: the composite's samples per pixel;
+- ``spp``: the composite's samples per pixel; ``--truth-spp N``: every score against the truth rendered
+  again at N samples (the truth noise then a perfect differential render at the composites' samples);
 - ``true albedo`` (``--albedo``): the local scene's albedo taken from the room itself (each pixel's
   surface's diffuse reflectance, 4 × 4 rays per pixel) instead of estimated from the photograph under the
-  light (procedural rooms only).
+  light (procedural rooms only);
+- ``true geometry`` (``--geometry``): the local scene's shape taken from the room itself instead of the
+  photograph's depth mesh: the room's triangles cut to the camera's view (what the photograph hides behind
+  its surfaces included: the floor under a table, the backs of the objects), the photograph's objects as
+  their own closed meshes; the albedo estimated as usual and laid on them through the photograph
+  (roomlight.fitting.insert.view_mesh; procedural rooms only).
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
-         [--hi-spp 256] [--quick] [--albedo] [--out FILE.json]
+         [--hi-spp 256] [--truth-spp N] [--quick] [--albedo] [--geometry] [--out FILE.json]
 Resumable: each photo's records are kept in ``--out`` as they are made.
 """
 
@@ -50,10 +56,11 @@ def photo_room(case_dir: Path, truth):
     return record, RoomScenes(room, int(record["config"]["max_depth"])), {o.id: o.mitsuba_mesh() for o in truth.objects}
 
 
-def truth_noise(case_dir: Path, truth, seed_offset: int = 1000):
+def truth_noise(case_dir: Path, truth, seed_offset: int = 1000, spp: int | None = None):
     """A perfect differential render with other samples: the photo plus (truth - photo) both rendered
-    again with another seed, and the new objects' own pixels from that truth. Scored against the
-    truth, it is the noise floor of every score (procedural rooms only: None for a captured-light photo)."""
+    again with another seed (at ``spp``, default the photo's own), and the new objects' own pixels from that
+    truth. Scored against the truth, it is the noise floor of every score (procedural rooms only: None for
+    a captured-light photo)."""
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import read_insert_truth, render_insert_truth
     from roomlight.evaluation.photobench.tracing import trace_image
@@ -63,12 +70,33 @@ def truth_noise(case_dir: Path, truth, seed_offset: int = 1000):
         return None
     record, scenes, meshes = built
     _, _, inserts = read_insert_truth(case_dir / fmt.TRUTH)
-    spp, seed, k = int(record["config"]["spp"]), int(record["seeds"]["photo"]) + seed_offset, float(record["exposure"])
+    spp = int(spp or record["config"]["spp"])
+    seed, k = int(record["seeds"]["photo"]) + seed_offset, float(record["exposure"])
     again, labels = render_insert_truth(scenes, meshes, inserts, truth.camera, spp, seed,
                                         int(record["config"]["supersample"]), k)
     photo_again = trace_image(scenes.scene(meshes), truth.camera, spp, seed) * k
     photo = fmt.read_rgb_exr(case_dir / fmt.IMAGE)
     return np.where(labels[..., None] > 0, again, photo + (again - photo_again)).astype(np.float32)
+
+
+def clean_truth(case_dir: Path, truth, spp: int, seed_offset: int = 2000):
+    """(H, W, 3) the photograph with its inserted objects path-traced again at ``spp`` samples per pixel
+    (another seed), to score against where the benchmark's own truth (the photo's samples) is too noisy to
+    tell composites apart; None for a captured-light photo."""
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.insertion import read_insert_truth, render_insert_truth
+
+    built = photo_room(case_dir, truth)
+    if built is None:
+        return None
+    record, scenes, meshes = built
+    _, labels, inserts = read_insert_truth(case_dir / fmt.TRUTH)
+    image, again = render_insert_truth(scenes, meshes, inserts, truth.camera, spp,
+                                       int(record["seeds"]["photo"]) + seed_offset,
+                                       int(record["config"]["supersample"]), float(record["exposure"]))
+    if not np.array_equal(again, labels):
+        raise RuntimeError(f"{case_dir.name}: the objects rendered again cover other pixels than the truth's")
+    return image
 
 
 def true_albedo(case_dir: Path, truth, supersample: int = 4):
@@ -94,6 +122,40 @@ def true_albedo(case_dir: Path, truth, supersample: int = 4):
     return rgb.reshape(cam.height, s, cam.width, s, 3).mean((1, 3))
 
 
+def true_geometry(case_dir: Path, truth, max_edge_px: float = 2.0):
+    """The room's own shape as a local scene (:class:`~roomlight.fitting.insert.composite.LocalGeometry`, the
+    photo's camera frame): every triangle of the room cut to the camera's view and split to ``max_edge_px``
+    pixels of the photograph, textured by projection into it; the photograph's objects whole, shaded flat
+    as the truth renders them. None for a captured-light photo."""
+    from roomlight.core.render.variant import mitsuba
+    from roomlight.fitting.insert.composite import LocalGeometry
+    from roomlight.fitting.insert.view_mesh import mesh_in_view
+
+    built = photo_room(case_dir, truth)
+    if built is None:
+        return None
+    _, scenes, _ = built
+    mi, cam = mitsuba(), truth.camera
+    m = cam.matrix
+
+    def to_camera(p):                         # world -> camera frame: q = R^T (p - o)
+        return (np.asarray(p, np.float64) - m[:3, 3]) @ m[:3, :3]
+
+    vs, fs, n = [], [], 0
+    for shape in scenes.base.shapes():
+        if not shape.is_mesh():
+            raise RuntimeError(f"{case_dir.name}: room shape {shape.id()} is not a triangle mesh")
+        params = mi.traverse(shape)
+        v = np.asarray(params["vertex_positions"], np.float64).reshape(-1, 3)
+        vs.append(to_camera(v))
+        fs.append(np.asarray(params["faces"], np.int64).reshape(-1, 3) + n)
+        n += len(v)
+    v, f, uv = mesh_in_view(np.concatenate(vs), np.concatenate(fs), cam, max_edge_px)
+    world_to_cam = np.linalg.inv(m)
+    objects = {int(o.label): (*o.geometry(world_to_cam), None) for o in truth.objects}
+    return LocalGeometry(v, f, uv, objects)
+
+
 def fitted_light(results: Path, photo: str, method: str):
     """(light, materials) of a fitted case of a results folder, or None."""
     from roomlight.core.io import read_panorama
@@ -114,7 +176,7 @@ def fitted_light(results: Path, photo: str, method: str):
 
 
 def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False,
-                   albedo: bool = False) -> list[dict]:
+                   albedo: bool = False, geometry: bool = False, truth_spp: int = 0) -> list[dict]:
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import composite_for_light, insertion_scores, read_insert_truth
     from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
@@ -124,6 +186,10 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
     strata = json.loads((case_dir / fmt.TRUTH / "insert.json").read_text()).get("strata", {})
     true_mats = {k: m.to_dict() for k, m in truth.materials.items()}
     out = []
+    if truth_spp:
+        image = clean_truth(case_dir, truth, truth_spp)
+        if image is None:                     # a captured-light photo: no room to render again
+            return out
 
     def add(name: str, composite: np.ndarray, reference: np.ndarray = image):
         for r in insertion_scores(composite, reference, labels, objects, truth.camera.matrix):
@@ -132,7 +198,7 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                             **{k: r[k] for k in ("id", "distance_m", *SCORES, "region_pixels", "object_pixels",
                                                  "shadow_pixels")}})
 
-    again = truth_noise(case_dir, truth)
+    again = truth_noise(case_dir, truth, spp=spp if truth_spp else None)
     if again is not None:
         add("truth noise", again)
     lights = {"oracle": (oracle_light(case_dir, "mesh", truth), true_mats),
@@ -143,10 +209,13 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
             if got is not None:
                 lights[f"{method} ({res.name})"] = got
     rho = true_albedo(case_dir, truth) if albedo else None
+    shape = true_geometry(case_dir, truth) if geometry else None
     for name, (light, mats) in lights.items():
         variants = [("", dict(enclose=True, spp=spp))]
         if rho is not None:
             variants.append((" true albedo", dict(enclose=True, spp=spp, albedo=rho)))
+        if shape is not None:
+            variants.append((" true geometry", dict(enclose=True, spp=spp, geometry=shape)))
         if quick:
             pass
         elif light.kind == "mesh":
@@ -183,9 +252,13 @@ def table(records: list[dict]) -> str:
         lines.append(f"| {v} | {len(rs)} | " + " | ".join(cells) + " |")
     lines += ["", "| paired (a − b) | region | object | shadow |", "|---|:---:|:---:|:---:|"]
     pairs = [("oracle", "oracle-envmap"), ("oracle unenclosed", "oracle-envmap"), ("oracle", "oracle unenclosed"),
-             ("oracle true albedo", "oracle-envmap true albedo")]
+             ("oracle true albedo", "oracle-envmap true albedo"), ("oracle true geometry", "oracle-envmap true geometry")]
     pairs += [(v[:-len(" true albedo")], v) for v in variants if v.endswith(" true albedo")]
-    pairs += [(v, v.replace("prior (", "prior-envmap (")) for v in variants if v.startswith("prior (")]
+    pairs += [(v, v[:-len(" true geometry")]) for v in variants if v.endswith(" true geometry")]
+    pairs += [(v, v.replace("prior (", "prior-envmap (")) for v in variants
+              if v.startswith("prior (") and v.endswith(" true geometry")]
+    pairs += [(v, v.replace("prior (", "prior-envmap (")) for v in variants
+              if v.startswith("prior (") and not v.endswith(" true geometry")]
     pairs += [(v, v + " unenclosed") for v in variants if v.startswith("prior (") and v + " unenclosed" in variants]
     for a, b in pairs:
         cells = []
@@ -194,7 +267,7 @@ def table(records: list[dict]) -> str:
             cells.append("–" if p is None else f"{p[0]:+.2f} [{p[1]:+.2f}, {p[2]:+.2f}] {p[3]}/{p[4]}")
         lines.append(f"| {a} − {b} | " + " | ".join(cells) + " |")
     # against distance: the lights as the pipeline uses them, not the diagnostic variants
-    plain = [p for p in pairs if "unenclosed" not in p[0] + p[1] and "true albedo" not in p[0] + p[1]]
+    plain = [p for p in pairs if all(x not in p[0] + p[1] for x in ("unenclosed", "true albedo", "true geometry"))]
     lines += ["", distance_table(records, plain)]
     return "\n".join(lines)
 
@@ -253,6 +326,10 @@ def main(argv=None) -> None:
     ap.add_argument("--out", type=Path, default=Path("results/insertion-diagnosis.json"))
     ap.add_argument("--quick", action="store_true", help="each light once: no unenclosed, other-seed or more-samples variant")
     ap.add_argument("--albedo", action="store_true", help="also composite with the local scene's true albedo")
+    ap.add_argument("--geometry", action="store_true", help="also composite with the local scene's true shape")
+    ap.add_argument("--truth-spp", type=int, default=0,
+                    help="score against the truth rendered again at this many samples (procedural rooms only; "
+                         "truth noise then at --spp)")
     args = ap.parse_args(argv)
     photos = sorted(p for p in args.bench.glob("photo-*") if p.is_dir())
     photos = photos[:args.photos] if args.photos else photos
@@ -262,7 +339,8 @@ def main(argv=None) -> None:
         if d.name in done:
             continue
         print(f"[{k + 1}/{len(photos)}] {d.name}", file=sys.stderr, flush=True)
-        done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick, args.albedo)
+        done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick, args.albedo,
+                                     args.geometry, args.truth_spp)
         tmp = args.out.with_suffix(".tmp")
         tmp.write_text(json.dumps(done))
         tmp.replace(args.out)

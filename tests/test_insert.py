@@ -349,3 +349,32 @@ def test_a_given_albedo_replaces_the_estimate_and_what_the_object_changes_scales
     assert 1.9 < change[0.2] / change[0.1] < 2.4, change
     with pytest.raises(Exception, match="albedo"):
         composite_objects(fitted, placed, size=32, spp=4, albedo=np.zeros((3, 3, 3)))
+
+
+@pytest.mark.mitsuba
+def test_a_given_local_geometry_equal_to_the_depth_mesh_reproduces_the_composite(fitted_dir):
+    """The local scene's shape can be given instead of the depth mesh (to measure what its shape costs);
+    given the depth mesh itself, with its own texture coordinates and objects, the composite is the same
+    image: the given shape goes through the same lighting, enclosing and albedo estimate."""
+    from roomlight.fitting.insert.composite import LocalGeometry
+    from roomlight.fitting.photo.geometry import build_geometry, working_size
+    from roomlight.fitting.photo.masks import resize_nearest
+
+    fitted = load_fitted_photo(fitted_dir)
+    placed = place_objects(fitted, [InsertSpec("sphere", at=(16, 21), scale=0.35, material="diffuse:0.5")])
+    base = composite_objects(fitted, placed, size=32, spp=16, seed=3)
+    case, cfg = fitted.case, fitted.config
+    geo = build_geometry(case, cfg)
+    gh, gw = working_size(case.height, case.width, cfg.geometry_size)
+    labels = resize_nearest(case.objects.labels, gh, gw).reshape(-1)
+    faces = geo.mesh.faces[~np.isin(labels, [o.label for o in geo.objects])[geo.mesh.faces].any(1)]
+    ii, jj = np.meshgrid(np.arange(gh), np.arange(gw), indexing="ij")
+    uv = np.stack([(jj.ravel() + 0.5) / gw, (ii.ravel() + 0.5) / gh], 1)
+    given = LocalGeometry(geo.mesh.vertices, faces, uv, {o.label: (o.vertices, o.faces, o.normals) for o in geo.objects})
+    again = composite_objects(fitted, placed, size=32, spp=16, seed=3, geometry=given)
+    np.testing.assert_array_equal(again.albedo, base.albedo)
+    np.testing.assert_array_equal(again.composite, base.composite)
+    # Without its objects the shape differs, and so does the composite.
+    bare = composite_objects(fitted, placed, size=32, spp=16, seed=3,
+                             geometry=LocalGeometry(geo.mesh.vertices, faces, uv, {}))
+    assert np.abs(bare.composite - base.composite).max() > 1e-3

@@ -243,7 +243,7 @@ def naive_light(case_dir, tau: float = 0.99):
 
 def composite_for_light(case_dir, light, materials: dict, objects: list[InsertedObject], camera, preset: str = "fast",
                         overrides: dict | None = None, spp: int = 64, local_scene: bool = True, seed: int = 11,
-                        enclose: bool = True, albedo: np.ndarray | None = None) -> np.ndarray:
+                        enclose: bool = True, albedo: np.ndarray | None = None, geometry=None) -> np.ndarray:
     """The new objects composited into the photo under ``light`` (a :class:`~roomlight.core.light.Light` whose
     frame is light-from-camera) by ``roomlight insert``'s differential rendering, at the photo's size:
     (H, W, 3) float32 linear.
@@ -252,6 +252,8 @@ def composite_for_light(case_dir, light, materials: dict, objects: list[Inserted
         materials: the local scene's objects' materials by label ({albedo, roughness, metallic}).
         objects: the new objects (world frame); camera: the photo's ``PhotoCamera``.
         albedo: (H, W, 3) the local scene's albedo instead of the estimated one (diagnosis only).
+        geometry: the local scene's shape instead of the photograph's depth mesh
+            (:class:`~roomlight.fitting.insert.composite.LocalGeometry`, photo camera frame; diagnosis only).
     """
     from roomlight.fitting.insert.composite import composite_objects
     from roomlight.fitting.insert.fitted import FittedPhoto
@@ -273,5 +275,5 @@ def composite_for_light(case_dir, light, materials: dict, objects: list[Inserted
                                    o.material.bsdf(), centre, world_to_cam[:3, :3] @ np.array([0.0, 1.0, 0.0]),
                                    2 * float(o.size[0])))
     res = composite_objects(fitted, placed, size=max(case.height, case.width), spp=spp, seed=seed,
-                            local_scene=local_scene, enclose=enclose, albedo=albedo)
+                            local_scene=local_scene, enclose=enclose, albedo=albedo, geometry=geometry)
     return res.composite

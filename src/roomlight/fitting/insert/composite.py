@@ -28,8 +28,8 @@ from roomlight.errors import RoomlightError
 from roomlight.fitting.insert.fitted import FittedPhoto
 from roomlight.fitting.insert.objects import InsertSpec, PlacedObject, place_object
 
-__all__ = ["InsertResult", "insert_objects", "place_objects", "composite_objects", "estimate_albedo", "seen_texels",
-           "ALBEDO_RANGE", "COVERAGE_RAYS"]
+__all__ = ["InsertResult", "LocalGeometry", "insert_objects", "place_objects", "composite_objects", "estimate_albedo",
+           "seen_texels", "ALBEDO_RANGE", "COVERAGE_RAYS"]
 
 #: The estimated albedo of the scene's surfaces is clamped to this range: below, a surface in shadow
 #: of the fitted light would turn black and hide the new objects' light on it; above, a surface the
@@ -65,6 +65,26 @@ class InsertResult:
     info: dict = field(default_factory=dict)
 
 
+@dataclass
+class LocalGeometry:
+    """A local scene's shape given instead of the photograph's depth mesh (to measure what the depth mesh's
+    shape costs: the photo benchmark gives its rooms' own triangles,
+    :func:`roomlight.fitting.insert.view_mesh.mesh_in_view`). Camera frame, metres.
+
+    Attributes:
+        vertices: (N, 3) the surfaces other than the photograph's objects; faces: (F, 3) int.
+        uv: (N, 2) each vertex's texture coordinate in the photograph (its pixel position over the image
+            size, v = 0 on the top row): the estimated albedo, an image, is laid on them through it.
+        objects: the photograph's objects by mask label: (vertices (n, 3), faces (f, 3), shading normals
+            (n, 3) or None for flat shading), each shaded with its fitted material.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    uv: np.ndarray
+    objects: dict = field(default_factory=dict)
+
+
 def _luminance(x: np.ndarray) -> np.ndarray:
     return x @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
 
@@ -73,7 +93,7 @@ class _LocalScene:
     """The photograph's depth mesh and fitted objects under the fitted light, in the room frame."""
 
     def __init__(self, fitted: FittedPhoto, out_hw: tuple[int, int], max_depth: int, with_scene: bool = True,
-                 placed=(), enclose: bool = True):
+                 placed=(), enclose: bool = True, geometry: LocalGeometry | None = None):
         from roomlight.fitting.photo.geometry import build_geometry, working_size
         from roomlight.fitting.photo.masks import resize_nearest
         from roomlight.fitting.photo.scene import object_shapes, photo_sensor
@@ -93,6 +113,13 @@ class _LocalScene:
         # Texture coordinates: v = 0 on the top image row (Mitsuba's convention), pixel centres.
         self.uv = np.stack([(jj.ravel() + 0.5) / gw, (ii.ravel() + 0.5) / gh], 1)
         self.objects = object_shapes(geo.objects, t, fitted.bsdfs()) if geo.objects and with_scene else {}
+        object_points = [t.points(o.vertices) for o in geo.objects]
+        if geometry is not None:  # another shape in the depth mesh's place (diagnosis)
+            self.background_vertices = t.points(np.asarray(geometry.vertices, np.float64))
+            self.background_faces = np.asarray(geometry.faces, np.int64)
+            self.uv = np.asarray(geometry.uv, np.float64)
+            self.objects = self._given_objects(geometry, fitted) if with_scene else {}
+            object_points = [t.points(np.asarray(g[0], np.float64)) for g in geometry.objects.values()]
         if not with_scene:  # the light alone: nothing to cast a shadow on or to reflect
             self.background_faces = self.background_faces[:0]
         oh, ow = out_hw
@@ -109,10 +136,24 @@ class _LocalScene:
             from roomlight.core.emitter.enclose import enclosing_depth
 
             pts = [self.background_vertices[np.unique(self.background_faces)]]
-            pts += [t.points(o.vertices) for o in geo.objects] if with_scene else []
+            pts += object_points if with_scene else []
             pts += [t.points(p.vertices) for p in placed]
             depth, self.enclosed_share = enclosing_depth(np.asarray(fitted.depth), np.concatenate(pts))
             self.depth = torch.from_numpy(depth)
+
+    def _given_objects(self, geometry: LocalGeometry, fitted: FittedPhoto) -> dict:
+        """The given objects' meshes in the room frame, each with its fitted material (by label)."""
+        from roomlight.core.render.materials import principled_bsdf
+        from roomlight.core.render.mesh import mitsuba_mesh
+        from roomlight.fitting.photo.scene import object_id
+
+        t, bsdfs, shapes = fitted.transform, fitted.bsdfs(), {}
+        for label, (v, f, n) in geometry.objects.items():
+            name = object_id(int(label))
+            shapes[name] = mitsuba_mesh(name, t.points(np.asarray(v, np.float64)), f,
+                                        bsdfs.get(int(label)) or principled_bsdf([0.5] * 3, 0.5, 0.5),
+                                        normals=None if n is None else t.directions(np.asarray(n, np.float64)))
+        return shapes
 
     def background(self, albedo: np.ndarray | None):
         """The depth mesh as a Mitsuba mesh, diffuse with ``albedo`` (H, W, 3) as a texture (None: white)."""
@@ -276,8 +317,8 @@ def insert_objects(fitted: FittedPhoto, specs: list[InsertSpec], size: int = 512
 
 def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int = 512, spp: int = 256,
                       seed: int = 0, max_depth: int = 5, say=None, local_scene: bool = True,
-                      unseen_share: bool = False, enclose: bool = True, albedo: np.ndarray | None = None
-                      ) -> InsertResult:
+                      unseen_share: bool = False, enclose: bool = True, albedo: np.ndarray | None = None,
+                      geometry: LocalGeometry | None = None) -> InsertResult:
     """Composite objects already placed (camera frame) into the fitted photograph.
 
     ``local_scene=False`` renders the objects under the light alone, without the photograph's depth mesh
@@ -289,6 +330,8 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     light's surface where it is, even through the local scene (:mod:`roomlight.core.emitter.enclose`:
     for comparison only). ``albedo``: (h, w, 3) the local scene's albedo at the working size, used instead of
     the one estimated from the photograph (to measure what that estimate costs: the scene's true albedo).
+    ``geometry``: the local scene's shape instead of the photograph's depth mesh (:class:`LocalGeometry`; to
+    measure what the depth mesh's shape costs: the scene's true triangles).
     """
     from roomlight.fitting.photo.geometry import resize_image, working_size
 
@@ -299,7 +342,8 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     timings = {}
 
     t1 = time.perf_counter()
-    local = _LocalScene(fitted, (oh, ow), max_depth, with_scene=local_scene, placed=placed, enclose=enclose)
+    local = _LocalScene(fitted, (oh, ow), max_depth, with_scene=local_scene, placed=placed, enclose=enclose,
+                        geometry=geometry)
     photo = resize_image(case.image, oh, ow)
     if albedo is not None:
         albedo = np.asarray(albedo, np.float32)
