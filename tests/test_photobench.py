@@ -18,8 +18,8 @@ from roomlight.evaluation.photobench.config import PhotoBenchConfig
 from roomlight.evaluation.photobench.degrade import degrade_depth, smooth_field
 
 #: The smallest photos the staging accepts: a few seconds of rendering each.
-TINY = PhotoBenchConfig(n=1, width=96, height=72, spp=16, probe_spp=128, oracle_height=16, oracle_spp=16, probes=2,
-                        min_pixels=8)
+TINY = PhotoBenchConfig(n=1, width=96, height=72, spp=16, probe_spp=128, insert_spp=256, oracle_height=16,
+                        oracle_spp=16, probes=2, min_pixels=8)
 
 
 # ------------------------------------------------------------------------------ independent geometry
@@ -361,6 +361,68 @@ def test_rerun_skips_and_degraded_depth_changes_only_the_methods_depth(built, tm
         assert near.min() - 1e-6 <= truth.depth_factors[p.id] <= near.max() + 1e-6
 
 
+@pytest.mark.mitsuba
+def test_a_clean_insertion_truth_is_added_in_place_unbiased_and_less_noisy(built, tmp_path):
+    """Another --insert-spp renders truth/insert_clean.exr again and changes nothing else; staged again from
+    its seeds it is the render a fresh build makes; it agrees with the photo-seeded truth on average, and
+    its noise is as much smaller as its samples are more."""
+    import hashlib
+
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench import insertion as ins
+    from roomlight.evaluation.photobench.builder import make_photo_benchmark
+
+    out = tmp_path / "bench"
+    shutil.copytree(built, out)
+    truth_dir = out / "photo-00000" / fmt.TRUTH
+    assert ins.insert_truth_stamp(truth_dir) == {"image": ins.INSERT_CLEAN, "spp": TINY.insert_spp}
+
+    def digests():
+        return {str(p.relative_to(out)): hashlib.sha256(p.read_bytes()).hexdigest() for p in out.rglob("*")
+                if p.is_file()}
+
+    # none: the photo as built before the clean truth existed (scored against the photo's own samples)
+    none = make_photo_benchmark(out, TINY.override(insert_spp=0), progress=False)
+    assert none["insert_updated"] == ["photo-00000"] and none["built"] == [] and none["updated"] == []
+    assert not (truth_dir / ins.INSERT_CLEAN).exists()
+    assert ins.insert_truth_stamp(truth_dir) == {"image": ins.INSERT_IMAGE, "spp": None}
+    before = digests()
+    more = make_photo_benchmark(out, TINY.override(insert_spp=1024), progress=False)
+    assert more["insert_updated"] == ["photo-00000"] and more["built"] == [] and more["skipped"] == []
+    after = digests()
+    changed = {k for k in after if before.get(k) != after[k]}
+    assert changed == {"photo-00000/truth/insert_clean.exr", "photo-00000/truth/insert.json",
+                       "photo-00000/truth/photo.json", "manifest.json"}
+    assert make_photo_benchmark(out, TINY.override(insert_spp=1024), progress=False)["skipped"] == ["photo-00000"]
+
+    # the same render as a photo built from scratch with that setting, bit for bit
+    fresh = tmp_path / "fresh"
+    make_photo_benchmark(fresh, TINY.override(insert_spp=1024), progress=False)
+    clean = fmt.read_rgb_exr(truth_dir / ins.INSERT_CLEAN).astype(np.float64)
+    assert np.array_equal(clean, fmt.read_rgb_exr(fresh / "photo-00000" / fmt.TRUTH / ins.INSERT_CLEAN))
+    assert json.loads((truth_dir / ins.INSERT_JSON).read_text())["clean"]["spp"] == 1024
+
+    # independent seeds: the photo-seeded truth (16 spp) minus the clean one averages zero over the frame ...
+    noisy = fmt.read_rgb_exr(truth_dir / ins.INSERT_IMAGE).astype(np.float64)
+    diff = (noisy - clean).mean(-1).ravel()
+    assert abs(diff.mean()) < 4.0 * diff.std() / math.sqrt(diff.size)
+    # ... and against a third render of the scene (256 spp, a seed of the test's own) the squared differences
+    # scale as 1/spp: E|noisy - clean|^2 / E|third - clean|^2 = (1/16 + 1/1024) / (1/256 + 1/1024) = 13
+    from roomlight.datagen.synth.rooms import generate_room
+    from roomlight.evaluation.photobench.roomscene import RoomScenes
+    from roomlight.evaluation.photobench.scoring import load_truth
+
+    record = json.loads((out / "photo-00000" / fmt.RECORD).read_text())
+    truth = load_truth(out / "photo-00000")
+    _, labels, objects = ins.read_insert_truth(truth_dir)
+    third, again = ins.render_insert_truth(RoomScenes(generate_room(record["room_seed"]), TINY.max_depth),
+                                           {o.id: o.mitsuba_mesh() for o in truth.objects}, objects, truth.camera,
+                                           256, 12345, TINY.supersample, record["exposure"])
+    assert np.array_equal(again, labels)
+    ratio = np.mean((noisy - clean) ** 2) / np.mean((third.astype(np.float64) - clean) ** 2)
+    assert 6.5 < ratio < 26.0
+
+
 # ------------------------------------------------------------------------------ scoring
 def _rolled(light, k):
     from roomlight.core.light import Light
@@ -544,18 +606,52 @@ def run_cli(*args):
 def test_cli_make_run_report_and_one_line_errors(built, tmp_path):
     out = tmp_path / "bench"
     shutil.copytree(built, out)
-    r = run_cli("bench", "make-photos", "--out", out, "--n", 1, "--res", "72x96", "--spp", 16, "--probes", 2,
-                "--probe-spp", 128, "--set", "oracle_height=16", "--set", "oracle_spp=16", "--set",
-                "min_pixels=8", "--quiet")
+    make = ("bench", "make-photos", "--out", out, "--n", 1, "--res", "72x96", "--spp", 16, "--probes", 2,
+            "--probe-spp", 128, "--set", "oracle_height=16", "--set", "oracle_spp=16", "--set", "min_pixels=8", "--quiet")
+    r = run_cli(*make, "--insert-spp", 256)
     assert r.exit_code == 0 and "1 already built" in r.output, r.output
     res = tmp_path / "res"
     r = run_cli("bench", "run-photos", out, "--out", res, "--methods", "oracle-envmap", "--eval-spp", 4, "--quiet")
     assert r.exit_code == 0 and "1 done" in r.output, r.output
     r = run_cli("bench", "report-photos", res, "--no-figures", "--quiet")
     assert r.exit_code == 0 and "| oracle-envmap | Env map |" in r.output, r.output
+    assert "Truth: the scene path-traced again at 256 samples per pixel" in (res / "report/report.md").read_text()
+
+    # a new clean insertion truth: the finished case is scored again from its saved composite, not refitted
+    record_file = res / "cases/photo-00000/oracle-envmap/result.json"
+    first = json.loads(record_file.read_text())
+    r = run_cli(*make, "--insert-spp", 512)
+    assert r.exit_code == 0 and "1 with a new clean insertion truth" in r.output, r.output
+    r = run_cli("bench", "run-photos", out, "--out", res, "--methods", "oracle-envmap", "--eval-spp", 4, "--quiet")
+    assert r.exit_code == 0 and "1 scored again against a new insertion truth" in r.output, r.output
+    again = json.loads(record_file.read_text())
+    assert again["insertion_truth"] == {"image": "insert_clean.exr", "spp": 512}
+    assert again["insertion_superseded"] == {"insertion_truth": first["insertion_truth"],
+                                             "insertion": first["insertion"]}
+    assert again["probes"] == first["probes"] and again["wall_seconds"] == first["wall_seconds"]
+    # the object's PSNR written out: gamma 2.2 after clipping to [0, 1], over its whole pixels
+    from PIL import Image
+
+    from roomlight.evaluation.photobench import case as fmt
+
+    composite = fmt.read_rgb_exr(record_file.parent / "insert.exr").astype(np.float64)
+    clean = fmt.read_rgb_exr(out / "photo-00000/truth/insert_clean.exr").astype(np.float64)
+    labels = np.asarray(Image.open(out / "photo-00000/truth/insert_mask.png"))
+    for e in again["insertion"]:
+        m = labels == e["label"]
+        mse = np.mean((np.clip(composite[m], 0, 1) ** (1 / 2.2) - np.clip(clean[m], 0, 1) ** (1 / 2.2)) ** 2)
+        assert e["object_psnr_ldr"] == pytest.approx(10 * math.log10(1 / mse), abs=1e-4)
+    r = run_cli("bench", "run-photos", out, "--out", res, "--methods", "oracle-envmap", "--eval-spp", 4, "--quiet")
+    assert "scored again" not in r.output and json.loads(record_file.read_text()) == again
+    # a case whose composite is gone cannot be scored again: said, not silently kept
+    (record_file.parent / "insert.exr").unlink()
+    r = run_cli(*make, "--insert-spp", 256)
+    r = run_cli("bench", "run-photos", out, "--out", res, "--methods", "oracle-envmap", "--eval-spp", 4, "--quiet")
+    assert r.exit_code == 1 and "its composite (insert.exr) is gone" in r.output, r.output
 
     for args, message in [
         (("make-photos", "--out", tmp_path / "x", "--depth-noise", "-1"), "--depth-noise must be in [0, 1)"),
+        (("make-photos", "--out", tmp_path / "x", "--insert-spp", "-1"), "--insert-spp must be at least 0"),
         (("make-photos", "--out", tmp_path / "x", "--set", "objects=[1, 2]"), "range from 2"),
         (("make-photos", "--out", tmp_path / "x", "--set", "colour=red"), "unknown field"),
         (("run-photos", tmp_path, "--out", tmp_path / "y", "--methods", "oracle"), "no manifest.json"),
@@ -697,7 +793,7 @@ def test_inserted_objects_have_their_truth_and_the_oracle_composites_them_better
     from roomlight.datagen.synth.rooms import generate_room
 
     case = _case(built)
-    image, labels, objects = read_insert_truth(case / fmt.TRUTH)
+    image, labels, objects = read_insert_truth(case / fmt.TRUTH, clean=False)
     assert [o.label for o in objects] == [101, 102] and all((labels == o.label).sum() > 0 for o in objects)
     photo = fmt.read_rgb_exr(case / fmt.IMAGE)
     record = json.loads((case / fmt.RECORD).read_text())

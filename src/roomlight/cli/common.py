@@ -183,8 +183,10 @@ def echo_run_summary(command: str, summary, out_dir) -> None:
     """Print a benchmark run's outcome (``summary.done``, ``.skipped``, ``.failed``: name -> error)
     and exit with status 1 when a case failed, so scripts notice; the failed cases are retried on
     the next run."""
-    click.echo(f"{command}: {len(summary.done)} done, {len(summary.skipped)} already done, "
-               f"{len(summary.failed)} failed -> {out_dir}")
+    rescored = getattr(summary, "rescored", [])
+    click.echo(f"{command}: {len(summary.done)} done, {len(summary.skipped)} already done"
+               + (f" ({len(rescored)} scored again against a new insertion truth)" if rescored else "")
+               + f", {len(summary.failed)} failed -> {out_dir}")
     for name, err in summary.failed.items():
         click.echo(f"  failed {name}: {err}", err=True)
     if summary.failed:

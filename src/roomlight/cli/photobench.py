@@ -43,6 +43,10 @@ def _shard(text):
 @click.option("--probe-spp", type=int, default=None,
               help="Samples per pixel of the ground-truth probe renders (only the window around the probes) "
                    f"{default_of(PhotoBenchConfig, 'probe_spp')}.")
+@click.option("--insert-spp", type=int, default=None,
+              help="Samples per pixel of the inserted objects' clean truth, the image their composites are "
+                   "scored against (rendered with a seed of its own; 0: none, scored against the render with "
+                   f"the photo's own samples) {default_of(PhotoBenchConfig, 'insert_spp')}.")
 @click.option("--fov", type=FINITE, default=None,
               help=f"Horizontal field of view in degrees {default_of(PhotoBenchConfig, 'fov')}.")
 @click.option("--probes", type=int, default=None,
@@ -65,25 +69,29 @@ def _shard(text):
                    "--set oracle_height=32 --set objects=[2,2] (repeatable).")
 @click.option("--overwrite", is_flag=True, help="Rebuild photos that are already built.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, fov, probes, inserts, inserts_at,
-                depth_noise, depth_scale, shard, sets, overwrite, quiet):
+def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, insert_spp, fov, probes, inserts,
+                inserts_at, depth_noise, depth_scale, shard, sets, overwrite, quiet):
     """Render the photo benchmark: photos of procedural rooms with inserted objects, and their truth.
 
     Each OUT/photo-NNNNN/ is a photo case (image.exr, depth.exr, mask.png, camera.json; what
     `roomlight fit-photo` reads) plus truth/: probe spheres (diffuse, matte, mirror) path-traced
     at several positions near the objects, their masks and positions, the objects' true materials,
     the exact depth and an oracle light. Finished photos are skipped; photos built with other
-    --depth-noise/--depth-scale only get a new depth.exr. OUT/manifest.json lists the photos.
+    --depth-noise/--depth-scale only get a new depth.exr, and those built with another --insert-spp
+    (or before the clean insertion truth existed) only a new truth/insert_clean.exr.
+    OUT/manifest.json lists the photos.
     """
     from roomlight.evaluation.photobench.builder import make_photo_benchmark
 
     cfg = suite_config(suite, n=n, seed=seed)
     height, width = res if res else (None, None)
-    cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, fov=fov, probes=probes, inserts=inserts,
+    cfg = cfg.override(width=width, height=height, spp=spp, probe_spp=probe_spp, insert_spp=insert_spp, fov=fov,
+                       probes=probes, inserts=inserts,
                        insert_placement=inserts_at, depth_noise=depth_noise, depth_scale=depth_scale, **parse_sets(sets))
     result = make_photo_benchmark(out_dir, cfg, overwrite=overwrite, shard=_shard(shard), progress=not quiet,
                                   captured_lights=captured_lights)
     click.echo(f"make-photos: {len(result['built'])} built, {len(result['updated'])} with a new depth, "
+               f"{len(result['insert_updated'])} with a new clean insertion truth, "
                f"{len(result['skipped'])} already built, {len(result['failed'])} failed; "
                f"{len(result['photos'])} photos in {out_dir}/manifest.json")
     for name, err in result["failed"].items():

@@ -54,11 +54,13 @@ class Case:
 @dataclass
 class RunSummary:
     """What one call of a benchmark run did: the names of the cases finished now, skipped as already
-    finished, and failed (name -> error)."""
+    finished, failed (name -> error), and, of the skipped ones, those whose scores were brought up to date
+    (the photo benchmark's inserted objects scored again against a new truth)."""
 
     done: list[str] = field(default_factory=list)
     skipped: list[str] = field(default_factory=list)
     failed: dict[str, str] = field(default_factory=dict)
+    rescored: list[str] = field(default_factory=list)
 
 
 def parse_shard(text: str | tuple | None) -> tuple[int, int]:

@@ -16,7 +16,9 @@ Photo ``i`` (``OUT/photo-0000i/``, the case format of :mod:`roomlight.evaluation
    matte, mirror), same camera, of the window around the probes (their pixels' bounding box
    grown by 2 px) at ``probe_spp``: the mean of two independent halves, whose difference
    (``noise_floor``: the metrics between the halves) tells how noisy the truth is; the probes'
-   mask (the whole frame); and the **oracle
+   mask (the whole frame); the new objects inserted for the insertion scores, rendered with the photo's
+   samples and seed and once more at ``insert_spp`` with a seed of their own (the clean truth they are
+   scored against; :mod:`roomlight.evaluation.photobench.insertion`); and the **oracle
    light**: the room without objects or probes captured as a radiance + radial depth panorama at
    the oracle centre (the representation's ceiling: what a perfect method could recover);
 6. ``depth.exr`` for the methods: the exact depth, or a degraded copy (``depth_noise``,
@@ -24,7 +26,8 @@ Photo ``i`` (``OUT/photo-0000i/``, the case format of :mod:`roomlight.evaluation
 
 A photo is built in a hidden temporary folder and renamed into place when complete; its
 ``truth/photo.json`` records the settings. A rerun skips finished photos; one finished with
-other depth settings only gets its ``depth.exr`` rewritten. ``shard=(i, n)`` builds photos
+other depth settings only gets its ``depth.exr`` rewritten, one with another ``insert_spp`` only its
+clean insertion truth. ``shard=(i, n)`` builds photos
 i, i + n, ...; ``OUT/manifest.json`` lists every finished photo of ``0 .. n-1`` (run once more
 without a shard after sharded builds to complete it).
 """
@@ -48,6 +51,7 @@ from roomlight.evaluation.photobench.objects import PROBE_MATERIALS
 from roomlight.evaluation.photobench.staging import StagingError, palette, stage_photo
 
 __all__ = ["MANIFEST", "MANIFEST_VERSION", "ROOMS_PER_PHOTO", "photo_name", "build_photo", "update_depth",
+           "update_insert_truth",
            "render_probe_truth", "probe_window",
            "make_photo_benchmark", "read_photo_manifest", "photo_seeds", "room_of_record", "PhotoBuildError"]
 
@@ -68,12 +72,14 @@ def photo_name(index: int) -> str:
 
 
 def photo_seeds(config: PhotoBenchConfig, index: int) -> dict:
-    """The render seeds of a photo: the photo, one per probe material, the oracle."""
+    """The render seeds of a photo: the photo, one per probe material, the oracle, the inserted objects'
+    clean truth."""
     base = int(np.random.default_rng([config.seed, index, _SALT_RENDER]).integers(0, 2**29))
     seeds = {"photo": base}
     for k, m in enumerate(PROBE_MATERIALS):
         seeds[f"probes_{m}"] = base + 1 + k
     seeds["oracle"] = base + 1 + len(PROBE_MATERIALS)
+    seeds["insert"] = base + 2 + len(PROBE_MATERIALS)
     return seeds
 
 
@@ -254,6 +260,7 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=N
     if inserts:  # the photo's scene with the new objects, with the photo's seed: elsewhere the photo itself
         insert_image, insert_labels = render_insert_truth(scenes, meshes, inserts, cam, config.spp, seeds["photo"],
                                                           config.supersample, k)
+        insert_clean = _clean_insert_truth(scenes, meshes, inserts, cam, config, seeds, k, insert_labels)
     oracle_rad = render_radiance(room_scene, st.oracle_center, height=config.oracle_height, spp=config.oracle_spp,
                                  seed=seeds["oracle"]) * k
     oracle_depth = render_depth(room_scene, st.oracle_center, height=config.oracle_height)
@@ -293,10 +300,13 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=N
 
             fmt.write_rgb_exr(tmp / fmt.TRUTH / ins.INSERT_IMAGE, insert_image)
             fmt.write_png(tmp / fmt.TRUTH / ins.INSERT_MASK, insert_labels)
+            if insert_clean is not None:
+                fmt.write_rgb_exr(tmp / fmt.TRUTH / ins.INSERT_CLEAN, insert_clean)
             fmt.write_json(tmp / fmt.TRUTH / ins.INSERT_JSON, {
                 "objects": [o.to_dict() for o in inserts], "image": ins.INSERT_IMAGE, "mask": ins.INSERT_MASK,
                 **({"strata": {o.id: s for o, s in zip(inserts, strata)}} if strata is not None else {}),
                 "pixels": {str(o.label): int((insert_labels == o.label).sum()) for o in inserts},
+                **_clean_entry(config, seeds),
                 "note": "the photo's scene with these objects, same camera, seed and samples as the photo"})
         fmt.write_json(tmp / fmt.PROBES, {"probes": probes, "materials": list(PROBE_MATERIALS),
                                           "images": {m: fmt.probe_image_name(m) for m in PROBE_MATERIALS},
@@ -317,7 +327,7 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=N
                        "probes": {str(p.label): int((probe_labels == p.label).sum()) for p in st.probes}},
             "saturated_fraction": saturated_fraction(record_ldr(photo), labels > 0),
             "config": config.scene_settings(), "depth": config.depth_settings(),
-            "seconds": round(time.perf_counter() - t0, 2),
+            "insert_truth": config.insert_settings(), "seconds": round(time.perf_counter() - t0, 2),
         }
         fmt.write_json(tmp / fmt.RECORD, record)
         final = out / name
@@ -337,6 +347,74 @@ def update_depth(photo_dir: Path, record: dict, config: PhotoBenchConfig) -> dic
     true_depth = read_depth_exr(photo_dir / fmt.TRUE_DEPTH)
     fmt.write_depth_exr(photo_dir / fmt.DEPTH, _depth_for_methods(true_depth, config, int(record["index"])))
     record = {**record, "depth": config.depth_settings()}
+    fmt.write_json(photo_dir / fmt.RECORD, record)
+    return record
+
+
+def _clean_insert_truth(scenes, meshes: dict, inserts, camera, config: PhotoBenchConfig, seeds: dict,
+                        exposure: float, labels: np.ndarray) -> np.ndarray | None:
+    """(H, W, 3) float32: the photo's scene with the new objects at ``insert_spp`` samples per pixel with the
+    clean truth's own seed, times ``exposure``; None when ``insert_spp`` is 0. Its objects must cover the
+    pixels ``labels`` says (the scene it is rendered in is the photo's)."""
+    from roomlight.evaluation.photobench.insertion import render_insert_truth
+
+    if config.insert_spp == 0:
+        return None
+    image, again = render_insert_truth(scenes, meshes, inserts, camera, config.insert_spp, int(seeds["insert"]),
+                                       config.supersample, exposure)
+    if not np.array_equal(again, labels):
+        raise PhotoBuildError("the inserted objects rendered again cover other pixels than the photo's truth: "
+                              "the room or the objects are not the ones the photo was built with")
+    return image
+
+
+def _clean_entry(config: PhotoBenchConfig, seeds: dict) -> dict:
+    """``insert.json``'s description of the clean truth (none when ``insert_spp`` is 0)."""
+    from roomlight.evaluation.photobench import insertion as ins
+
+    if config.insert_spp == 0:
+        return {}
+    return {"clean": {"image": ins.INSERT_CLEAN, "spp": config.insert_spp, "seed": int(seeds["insert"]),
+                      "note": "the same scene path-traced with a seed of its own: the truth composites are "
+                              "scored against"}}
+
+
+def _insert_settings_of(record: dict) -> dict:
+    """The clean insertion truth's settings a photo was built with (none before they existed)."""
+    return record.get("insert_truth", {"insert_spp": 0})
+
+
+def update_insert_truth(photo_dir: Path, record: dict, config: PhotoBenchConfig, captured_lights=None) -> dict:
+    """Render a finished photo's clean insertion truth again for ``config.insert_spp`` (or remove it for 0),
+    the rest of the photo kept: its room, camera and objects are staged again from their seeds, exactly as
+    they were built (checked: the new objects must cover the same pixels)."""
+    from roomlight.evaluation.photobench import insertion as ins
+
+    truth_dir = photo_dir / fmt.TRUTH
+    index = int(record["index"])
+    seeds = {**record["seeds"], "insert": photo_seeds(config, index)["insert"]}
+    about = json.loads((truth_dir / ins.INSERT_JSON).read_text()) if (truth_dir / ins.INSERT_JSON).is_file() else None
+    if about is not None:
+        about.pop("clean", None)
+        if config.insert_spp > 0:
+            scenes, st, _ = _stage(config, index, captured_lights)
+            if [o.id for o in st.objects] != [o["id"] for o in record["objects"]]:
+                raise PhotoBuildError(f"{photo_dir.name}: staged again, the photo's objects differ from its record")
+            _, labels, inserts = ins.read_insert_truth(truth_dir, clean=False)
+            meshes = {o.id: o.mitsuba_mesh() for o in st.objects}
+            try:
+                image = _clean_insert_truth(scenes, meshes, inserts, st.camera, config, seeds,
+                                            float(record["exposure"]), labels.astype(np.uint8))
+            except PhotoBuildError as exc:
+                raise PhotoBuildError(f"{photo_dir.name}: {exc}") from None
+            part = truth_dir / f".{ins.INSERT_CLEAN}.{os.getpid()}.partial.exr"
+            fmt.write_rgb_exr(part, image)
+            os.replace(part, truth_dir / ins.INSERT_CLEAN)
+            about.update(_clean_entry(config, seeds))
+        else:
+            (truth_dir / ins.INSERT_CLEAN).unlink(missing_ok=True)
+        fmt.write_json(truth_dir / ins.INSERT_JSON, about)
+    record = {**record, "seeds": seeds, "insert_truth": config.insert_settings()}
     fmt.write_json(photo_dir / fmt.RECORD, record)
     return record
 
@@ -371,8 +449,9 @@ def _write_manifest(out: Path, config: PhotoBenchConfig) -> dict:
 
 def make_photo_benchmark(out_dir, config: PhotoBenchConfig | None = None, overwrite: bool = False,
                          shard=(0, 1), progress: bool = True, captured_lights=None) -> dict:
-    """Build (a shard of) the photo benchmark; returns the manifest with ``built``, ``updated``,
-    ``skipped`` and ``failed`` (name -> message) of this call added. ``captured_lights``: the folder of
+    """Build (a shard of) the photo benchmark; returns the manifest with ``built``, ``updated`` (a new
+    depth), ``insert_updated`` (a new clean insertion truth), ``skipped`` and ``failed`` (name -> message)
+    of this call added. ``captured_lights``: the folder of
     HDR panoramas for the wide suite's captured-light photos (default: Blender's studio lights,
     :func:`~roomlight.evaluation.photobench.captured.find_captured_lights`)."""
     config = config or PhotoBenchConfig()
@@ -384,27 +463,36 @@ def make_photo_benchmark(out_dir, config: PhotoBenchConfig | None = None, overwr
         raise PhotoBuildError(f"--out {out}: exists and is not a folder")
     out.mkdir(parents=True, exist_ok=True)
     indices = [k for k in range(config.n) if k % n == i]
-    built, updated, skipped, failed = [], [], [], {}
-    todo = []
+    built, updated, insert_updated, skipped, failed = [], [], [], [], {}
+    todo, todo_insert = [], []
     for k in indices:
         rec = None if overwrite else _finished(out / photo_name(k), config)
         if rec is None:
             todo.append(k)
-        elif rec.get("depth") != config.depth_settings():
-            update_depth(out / photo_name(k), rec, config)
+            continue
+        if rec.get("depth") != config.depth_settings():
+            rec = update_depth(out / photo_name(k), rec, config)
             updated.append(photo_name(k))
-        else:
+        if _insert_settings_of(rec) != config.insert_settings():
+            todo_insert.append((k, rec))
+        elif photo_name(k) not in updated:
             skipped.append(photo_name(k))
     bar = None
-    if progress and todo:
+    if progress and (todo or todo_insert):
         from roomlight.core.progress import progress_bar
 
-        bar = progress_bar(total=len(indices), initial=len(indices) - len(todo), desc="make-photos", unit="photo")
+        bar = progress_bar(total=len(indices), initial=len(indices) - len(todo) - len(todo_insert),
+                           desc="make-photos", unit="photo")
+    jobs = [(k, None) for k in todo] + todo_insert
     try:
-        for k in todo:
+        for k, rec in jobs:
             try:
-                build_photo(k, out, config, captured_lights)
-                built.append(photo_name(k))
+                if rec is None:
+                    build_photo(k, out, config, captured_lights)
+                    built.append(photo_name(k))
+                else:  # the clean insertion truth alone
+                    update_insert_truth(out / photo_name(k), rec, config, captured_lights)
+                    insert_updated.append(photo_name(k))
             except PhotoBuildError as exc:
                 failed[photo_name(k)] = str(exc)
                 if bar is not None:
@@ -416,7 +504,8 @@ def make_photo_benchmark(out_dir, config: PhotoBenchConfig | None = None, overwr
         if bar is not None:
             bar.close()
     manifest = _write_manifest(out, config)
-    return {**manifest, "built": built, "updated": updated, "skipped": skipped, "failed": failed}
+    return {**manifest, "built": built, "updated": updated, "insert_updated": insert_updated, "skipped": skipped,
+            "failed": failed}
 
 
 def read_photo_manifest(bench_dir) -> dict:

@@ -9,11 +9,15 @@ from roomlight.core.color import MIDDLE_GREY
 from roomlight.core.config import StrictConfig
 from roomlight.errors import RoomlightError
 
-__all__ = ["PhotoBenchConfig", "DEPTH_FIELDS", "SUITES", "INSERT_PLACEMENTS", "INSERT_STRATA", "suite_config"]
+__all__ = ["PhotoBenchConfig", "DEPTH_FIELDS", "INSERT_FIELDS", "SUITES", "INSERT_PLACEMENTS", "INSERT_STRATA", "suite_config"]
 
 #: Settings that change only the depth file the methods get (``depth.exr``): a photo built with
 #: other values of these alone is updated in place instead of being rendered again.
 DEPTH_FIELDS = ("depth_noise", "depth_scale")
+#: Settings that change only the inserted objects' clean truth (``truth/insert_clean.exr``): a photo built
+#: with other values of these alone gets that render made again in place. A photo recorded without them was
+#: built before the clean truth existed: its value is 0 (none).
+INSERT_FIELDS = ("insert_spp",)
 #: The photo suites: the generator's own rooms and cameras, and the wide suite (photobench.variety).
 SUITES = ("rooms", "wide")
 _WIDE_DEFAULTS = {"suite": "rooms", "fov_range": None, "pitch_range": None, "captured_every": 0,
@@ -39,6 +43,7 @@ class PhotoBenchConfig(StrictConfig):
     fov: float = 60.0                                    #: horizontal field of view
     spp: int = 256                                       #: samples per pixel of the photo
     probe_spp: int = 1024                                #: samples per pixel of the probe renders (around the probes)
+    insert_spp: int = 4096                               #: samples per pixel of the inserted objects' clean truth (0: none)
     max_depth: int = 5                                   #: longest light path of the ground-truth renders
     eye_height: tuple[float, float] = (1.5, 1.7)         #: camera height range above the floor
     objects: tuple[int, int] = (2, 3)                    #: inserted objects per photo (inclusive range)
@@ -68,6 +73,7 @@ class PhotoBenchConfig(StrictConfig):
                   (0.0 < self.fov < 150.0, "--fov must be in (0, 150) degrees"),
                   (self.spp >= 1 and self.oracle_spp >= 1, "--spp must be at least 1"),
                   (self.probe_spp >= 2, "--probe-spp must be at least 2 (two independent halves)"),
+                  (self.insert_spp >= 0, "--insert-spp must be at least 0 (0: no clean truth)"),
                   (self.max_depth >= 2, "max_depth must be at least 2"),
                   (0.0 < self.eye_height[0] <= self.eye_height[1], "eye_height must be an increasing positive range"),
                   # a mask with a single non-zero value reads as a binary mask, whose connected
@@ -101,11 +107,11 @@ class PhotoBenchConfig(StrictConfig):
         return json.loads(json.dumps(asdict(self)))
 
     def scene_settings(self) -> dict:
-        """The settings a photo's renders depend on (all but ``n`` and the depth degradation): a
-        built photo is reused only when they match. The wide suite's fields are left out at their
-        defaults, so photos built before they existed still match."""
+        """The settings a photo's renders depend on (all but ``n``, the depth degradation and the clean
+        insertion truth's samples): a built photo is reused only when they match. The wide suite's fields
+        are left out at their defaults, so photos built before they existed still match."""
         d = self.to_dict()
-        for k in ("n", *DEPTH_FIELDS):
+        for k in ("n", *DEPTH_FIELDS, *INSERT_FIELDS):
             d.pop(k)
         for k, default in _WIDE_DEFAULTS.items():
             if d[k] == default:
@@ -114,6 +120,10 @@ class PhotoBenchConfig(StrictConfig):
 
     def depth_settings(self) -> dict:
         return {k: getattr(self, k) for k in DEPTH_FIELDS}
+
+    def insert_settings(self) -> dict:
+        """The clean insertion truth's settings, as a photo's record keeps them (``insert_truth``)."""
+        return {k: getattr(self, k) for k in INSERT_FIELDS}
 
     def override(self, **changes) -> PhotoBenchConfig:
         """A copy with the fields that are not None changed; unknown names and wrong types are refused."""

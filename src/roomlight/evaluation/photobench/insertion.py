@@ -6,10 +6,15 @@ recovered light composites them (``roomlight insert``'s differential rendering).
 reference light is captured around) or spread over its visible surfaces by distance and height
 (``"stratified"``, :func:`stage_stratified_inserts`); a built-in shape (blob, knot, torus or
 sphere) of the probe's bounding radius, turned about the vertical, resting on the probe's support, with a
-principled material drawn like the photo's own objects. The truth is the photo's scene with them,
-path-traced from the photo's camera with the photo's seed and samples, so wherever the new objects
-change nothing it is the photograph itself, sample for sample (``truth/insert.exr``, their coverage
-labels ``truth/insert_mask.png`` and their description ``truth/insert.json``).
+principled material drawn like the photo's own objects. The photo's scene with them is path-traced
+from the photo's camera twice: with the photo's seed and samples, so that wherever the new objects change
+nothing it is the photograph itself, sample for sample (``truth/insert.exr``); and with a seed of its
+own at ``insert_spp`` samples per pixel (``truth/insert_clean.exr``), the truth the composites are scored
+against. At the photo's own samples the first is as noisy as the composites it would judge: on the original
+suite (64 spp) it held the objects' scores under a 29 dB floor where the clean one leaves 39 dB
+(docs/results.md). Their coverage labels are ``truth/insert_mask.png``, their description
+``truth/insert.json``. Photos built before the clean truth existed have only the first; ``make-photos``
+adds the second in place.
 
 **Scoring** (:func:`insertion_scores`): per new object, the composite against the truth in the
 object's *region*, its whole pixels dilated by its own projected radius (so the region covers the
@@ -29,15 +34,17 @@ import numpy as np
 
 from roomlight.evaluation.photobench.objects import InsertedObject, ProbeSphere, draw_material
 
-__all__ = ["INSERT_SHAPES", "INSERT_LABEL0", "INSERT_IMAGE", "INSERT_MASK", "INSERT_JSON", "stage_inserts",
-           "stage_stratified_inserts",
-           "render_insert_truth", "read_insert_truth", "insertion_scores", "region_mask", "shadow_mask"]
+__all__ = ["INSERT_SHAPES", "INSERT_LABEL0", "INSERT_IMAGE", "INSERT_CLEAN", "INSERT_MASK", "INSERT_JSON",
+           "stage_inserts", "stage_stratified_inserts", "render_insert_truth", "read_insert_truth",
+           "insert_truth_stamp", "insertion_scores", "region_mask", "shadow_mask"]
 
 #: Shapes of the inserted test objects.
 INSERT_SHAPES = ("blob", "knot", "torus", "sphere")
 #: Labels of the inserted objects in ``insert_mask.png`` start here (the photo's own objects: 1, 2, ...).
 INSERT_LABEL0 = 101
 INSERT_IMAGE, INSERT_MASK, INSERT_JSON = "insert.exr", "insert_mask.png", "insert.json"
+#: The inserted objects' truth path-traced with a seed of its own at ``insert_spp``: what composites are scored against.
+INSERT_CLEAN = "insert_clean.exr"
 _GAP = 0.002  # the probes' hover above their support (roomlight.evaluation.photobench.staging)
 
 
@@ -137,20 +144,36 @@ def render_insert_truth(scenes, photo_meshes: dict, inserts: list[InsertedObject
     return image.astype(np.float32), labels
 
 
-def read_insert_truth(truth_dir) -> tuple[np.ndarray, np.ndarray, list[InsertedObject]] | None:
-    """(image, labels, objects) of a photo built with inserted objects, or None."""
+def read_insert_truth(truth_dir, clean: bool = True) -> tuple[np.ndarray, np.ndarray, list[InsertedObject]] | None:
+    """(image (H, W, 3) float32, labels (H, W) int32, objects) of a photo built with inserted objects, or None.
+
+    ``clean``: the image is the truth scored against (``insert_clean.exr`` where the photo has one, else the
+    render with the photo's samples); False: always the render with the photo's samples."""
     from roomlight.core.io import read_exr
 
     d = Path(truth_dir)
     if not (d / INSERT_JSON).is_file():
         return None
-    ch = read_exr(d / INSERT_IMAGE)
+    ch = read_exr(d / (insert_truth_stamp(d)["image"] if clean else INSERT_IMAGE))
     image = np.stack([ch[c] for c in "RGB"], -1).astype(np.float32)
     from PIL import Image
 
     labels = np.asarray(Image.open(d / INSERT_MASK)).astype(np.int32)
     objects = [InsertedObject.from_dict(o) for o in json.loads((d / INSERT_JSON).read_text())["objects"]]
     return image, labels, objects
+
+
+def insert_truth_stamp(truth_dir) -> dict | None:
+    """Which image the inserted objects are scored against and at how many samples per pixel
+    (``{"image": file name, "spp": n}``), or None for a photo without inserted objects. A score is valid
+    while the stamp it was made with is the photo's."""
+    d = Path(truth_dir)
+    if not (d / INSERT_JSON).is_file():
+        return None
+    clean = json.loads((d / INSERT_JSON).read_text()).get("clean")
+    if clean and (d / clean["image"]).is_file():
+        return {"image": str(clean["image"]), "spp": int(clean["spp"])}
+    return {"image": INSERT_IMAGE, "spp": None}  # the photo's own samples
 
 
 def region_mask(labels: np.ndarray, label: int) -> np.ndarray:

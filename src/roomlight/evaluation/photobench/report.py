@@ -386,14 +386,32 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
     return {"methods": methods, "paired": paired, "distance": distance, "metrics": list(metrics)}
 
 
+def insertion_truths(results: list[dict]) -> str:
+    """In words, the truth the records' inserted objects were scored against (a mix is said as such)."""
+    seen = {json.dumps(r.get("insertion_truth") or {"image": "insert.exr", "spp": None}, sort_keys=True)
+            for r in results if r.get("insertion")}
+    if not seen:
+        return ""
+    if len(seen) > 1:
+        return ("a mix of truths (records made before and after their photos got a clean insertion truth): "
+                "run run-photos again on these results to score every record against the same one")
+    stamp = json.loads(seen.pop())
+    if stamp.get("spp"):
+        return f"the scene path-traced again at {stamp['spp']} samples per pixel with a seed of its own ({stamp['image']})"
+    return ("the scene rendered with the photo's own samples and seed (insert.exr), as noisy as a composite: "
+            "rebuild the photos with make-photos --insert-spp for a clean truth")
+
+
 def _insertion_markdown(summary: dict | None, reference: str = "prior") -> list[str]:
     if not summary or not summary["methods"]:
         return []
     labels = {k: INSERT_LABELS[k] for k in summary.get("metrics", INSERT_LABELS)}
+    truth = f" Truth: {summary['truth']}." if summary.get("truth") else ""
     md = ["## Inserted objects (roomlight insert)", "",
           "Each photo's new objects composited under each recovered light by differential rendering (`naive-paste`: "
           "lit by a uniform light of the photo's mean colour, alone) against their path-traced truth in the room; "
-          "the region is the object dilated by its projected radius, covering its shadow. Mean ± std over objects.", "",
+          "the region is the object dilated by its projected radius, covering its shadow. Mean ± std over objects."
+          + truth, "",
           "| Method | " + " | ".join(labels.values()) + " | objects |",
           "|---|" + ":---:|" * len(labels) + "---:|"]
     for m in ordered(summary["methods"], PHOTO_METHOD_ORDER):
@@ -440,7 +458,7 @@ def write_photo_report(res_dir, out_dir=None, figures: bool = True, progress: bo
     outside = outside_counts(results)
     timing = _timing(results)
     inserted = insertion_records(results)
-    ins_summary = insertion_summary(inserted, reference) if inserted else None
+    ins_summary = {**insertion_summary(inserted, reference), "truth": insertion_truths(results)} if inserted else None
     paths = {"markdown": out / "report.md", "csv": out / "table.csv", "materials": out / "materials.csv",
              "cases": out / "cases.csv", "json": out / "summary.json"}
     write_wide_csv(paths["csv"], probes, "eval")

@@ -16,7 +16,10 @@ For each case (photo x method), in manifest order:
    the true ones;
 3. when the photo has inserted objects with their truth, they are composited into the photo under the
    recovered light by ``roomlight insert``'s differential rendering (the naive paste: lit alone, no
-   shadow) and scored in their regions (:mod:`roomlight.evaluation.photobench.insertion`).
+   shadow) and scored in their regions (:mod:`roomlight.evaluation.photobench.insertion`) against the
+   photo's insertion truth; the record says which (``insertion_truth``). A finished case whose photo has
+   got another insertion truth since (``make-photos --insert-spp``) is scored again from its saved
+   composite when the run resumes, nothing fitted or rendered again (:func:`rescore_insertions`).
 
 Layout of ``RES``::
 
@@ -29,7 +32,7 @@ Layout of ``RES``::
         fit/              the fit's own files (panorama.exr, emitter/, materials.json, result.json, ...)
         error.json        instead of result.json when the case failed (retried on the next run)
 
-Running, resuming (a case with a ``result.json`` is skipped), sharding, failures and ``--scheduler``
+Running, resuming (a case with a ``result.json`` is skipped, its insertion scores brought up to date), sharding, failures and ``--scheduler``
 are the harness's (:mod:`roomlight.evaluation.harness.runner`), as for ``bench run``.
 """
 
@@ -47,7 +50,8 @@ from roomlight.fitting.methods import ESTIMATE_ROWS, PHOTO, check_methods, defau
 from roomlight.fitting.methods import method as method_record
 from roomlight.evaluation.photobench.adapter import PHOTO_FIT_METHODS, fit_photo_case
 from roomlight.evaluation.photobench.ceiling import CEILING, prior_ceiling_light
-from roomlight.evaluation.photobench.insertion import NAIVE
+from roomlight.evaluation.photobench import case as fmt
+from roomlight.evaluation.photobench.insertion import NAIVE, insert_truth_stamp
 from roomlight.evaluation.photobench.builder import read_photo_manifest
 from roomlight.evaluation.photobench.scoring import (SCORE_MAX_DEPTH, load_truth, material_errors, oracle_light,
                                           probes_outside,
@@ -138,11 +142,12 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
     record = {"photo": case.item, "case_dir": str(Path(case.source).resolve()), "method": case.method,
               "emitter_kind": light.kind, "probes": scores, "materials": materials,
               "probes_outside": outside, "insertion": insertion,
+              "insertion_truth": insert_truth_stamp(Path(case.source) / fmt.TRUTH) if insertion else None,
               "depth_factors": truth.depth_factors, "fit_seconds": fit_seconds, "wall_seconds": wall,
               "eval_seconds": time.perf_counter() - t1, "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH,
               "recovered_resolution": list(light.radiance.shape[:2]),
               "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
-                        **({"insert": "insert.exr"} if insertion else {}),
+                        **({"insert": INSERT_COMPOSITE} if insertion else {}),
                         **({"fit": "fit"} if fitted else {})}}
     (cdir / "error.json").unlink(missing_ok=True)
     write_json(cdir / RESULT, record)
@@ -176,8 +181,52 @@ def _insertion(case: Case, light, truth, fitted_materials, preset, overrides, sp
     materials = fitted_materials if fitted_materials else {k: m.to_dict() for k, m in truth.materials.items()}
     composite = composite_for_light(case.source, light, materials, objects, truth.camera, preset, overrides, spp,
                                     local_scene=case.method != NAIVE)
-    fmt.write_rgb_exr(cdir / "insert.exr", composite)
+    fmt.write_rgb_exr(cdir / INSERT_COMPOSITE, composite)
     return insertion_scores(composite, image, labels, objects, truth.camera.matrix)
+
+
+#: A case's composite of the photo's inserted objects under its light.
+INSERT_COMPOSITE = "insert.exr"
+#: The insertion truth of a record made before records said which (the render with the photo's samples).
+_PHOTO_SAMPLES_TRUTH = {"image": "insert.exr", "spp": None}
+
+
+def rescore_insertions(cases, out_dir) -> tuple[list[str], dict[str, str]]:
+    """Score again the inserted objects of every finished case (``result.json``) that scored them against
+    another truth than its photo's today, from the composite it saved; nothing is fitted or rendered again.
+    The record keeps its former scores under ``insertion_superseded``. Returns (the names scored again,
+    name -> why a case could not be: its composite is gone)."""
+    import json
+
+    from roomlight.evaluation.photobench import case as fmt
+    from roomlight.evaluation.photobench.insertion import insert_truth_stamp, insertion_scores, read_insert_truth
+
+    out = Path(out_dir)
+    done, failed = [], {}
+    for case in cases:
+        path = case.directory(out) / RESULT
+        if not path.is_file():
+            continue
+        record = json.loads(path.read_text())
+        stamp = insert_truth_stamp(Path(case.source) / fmt.TRUTH)
+        if record.get("insertion") is None or stamp is None:
+            continue
+        before = record.get("insertion_truth", _PHOTO_SAMPLES_TRUTH)
+        if before == stamp:
+            continue
+        composite_file = path.parent / INSERT_COMPOSITE
+        if not composite_file.is_file():
+            failed[case.name] = (f"its inserted objects were scored against another truth ({before['image']}) and "
+                                 f"its composite ({INSERT_COMPOSITE}) is gone: delete {path} to run it again")
+            continue
+        image, labels, objects = read_insert_truth(Path(case.source) / fmt.TRUTH)
+        camera = load_truth(case.source).camera
+        scores = insertion_scores(fmt.read_rgb_exr(composite_file), image, labels, objects, camera.matrix)
+        record["insertion_superseded"] = {"insertion_truth": before, "insertion": record["insertion"]}
+        record.update(insertion=scores, insertion_truth=stamp)
+        write_json(path, record)
+        done.append(case.name)
+    return done, failed
 
 
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
@@ -206,6 +255,10 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
     if model_name is not None:
         settings["model"] = str(model_name)
     check_run_file(out, settings, ("preset", "overrides", "eval_spp", "max_depth"))
+    rescored, stale = rescore_insertions(cases, out)
     one = partial(run_photo_case, out_dir=out, preset=preset, model=model, eval_spp=eval_spp, fit=fit,
                   progress=False, overrides=overrides)
-    return run_cases(cases, out, one, desc="run-photos", progress=progress, scheduler=scheduler)
+    summary = run_cases(cases, out, one, desc="run-photos", progress=progress, scheduler=scheduler)
+    summary.rescored.extend(rescored)
+    summary.failed.update(stale)
+    return summary
