@@ -6,8 +6,11 @@ path-traced truth: the region (object and surroundings), the object's own pixels
 region without the object). Paired per object, each factor's effect is printed with a 95 % bootstrap
 interval, and every score's noise floor beside it:
 
-- ``truth noise``: the truth rendered again with another seed, scored against itself; the best score
-  any composite can reach at the benchmark's samples;
+- the truth: the suite's clean insertion truth where it has one (``make-photos --insert-spp``), else the
+  render with the photo's own samples;
+- ``truth noise``: a perfect differential render at the composites' samples (against a clean truth) or the
+  truth rendered again with another seed (against the photo-sampled one); the best score any composite can
+  reach at those samples;
 - ``composite noise``: the same composite with another seed;
 - lights: the room's own panorama as a 2.5D light (``oracle``) and at infinity (``oracle-envmap``), and
   any fitted light of a results folder (``--results DIR``: its ``recovered.exr`` and fitted materials);
@@ -178,7 +181,8 @@ def fitted_light(results: Path, photo: str, method: str):
 def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False,
                    albedo: bool = False, geometry: bool = False, truth_spp: int = 0) -> list[dict]:
     from roomlight.evaluation.photobench import case as fmt
-    from roomlight.evaluation.photobench.insertion import composite_for_light, insertion_scores, read_insert_truth
+    from roomlight.evaluation.photobench.insertion import (composite_for_light, insert_truth_stamp, insertion_scores,
+                                                           read_insert_truth)
     from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
 
     truth = load_truth(case_dir)
@@ -198,7 +202,8 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                             **{k: r[k] for k in ("id", "distance_m", *SCORES, "region_pixels", "object_pixels",
                                                  "shadow_pixels")}})
 
-    again = truth_noise(case_dir, truth, spp=spp if truth_spp else None)
+    clean_in_suite = insert_truth_stamp(case_dir / fmt.TRUTH)["spp"] is not None
+    again = truth_noise(case_dir, truth, spp=spp if (truth_spp or clean_in_suite) else None)
     if again is not None:
         add("truth noise", again)
     lights = {"oracle": (oracle_light(case_dir, "mesh", truth), true_mats),
