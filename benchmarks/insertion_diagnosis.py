@@ -25,10 +25,14 @@ interval, and every score's noise floor beside it:
   photograph's depth mesh: the room's triangles cut to the camera's view (what the photograph hides behind
   its surfaces included: the floor under a table, the backs of the objects), the photograph's objects as
   their own closed meshes; the albedo estimated as usual and laid on them through the photograph
-  (roomlight.fitting.insert.view_mesh; procedural rooms only).
+  (roomlight.fitting.insert.view_mesh; procedural rooms only);
+- ``true level`` (``--level``): each fitted light scaled, channel by channel, by the factor that gives its
+  diffuse probes (the results folder's ``probes_diffuse.exr``) the true mean radiance: the light's level
+  and colour made right, its shape left as fitted. Paired with the fitted light at infinity scaled the
+  same way, it says what the 2.5D shape is worth once the level is right.
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
-         [--hi-spp 256] [--truth-spp N] [--quick] [--albedo] [--geometry] [--out FILE.json]
+         [--hi-spp 256] [--truth-spp N] [--quick] [--albedo] [--geometry] [--level] [--out FILE.json]
 Resumable: each photo's records are kept in ``--out`` as they are made.
 """
 
@@ -178,8 +182,35 @@ def fitted_light(results: Path, photo: str, method: str):
     return light, materials
 
 
+def level_factors(results: Path, photo: str, method: str, truth) -> np.ndarray:
+    """(3,) per channel: the true diffuse probes' mean radiance over the fitted light's (its probe render in
+    the results folder), inside the probe window. A probe render is linear in the light, so the light
+    scaled by these factors gives its diffuse probes the true mean colour and level."""
+    from roomlight.core.io import read_exr
+
+    channels = read_exr(results / "cases" / photo / method / "probes_diffuse.exr")
+    fitted = np.stack([channels[c] for c in "RGB"], -1)
+    inside = truth.window_mask > 0
+    true = truth.probe_images["diffuse"][inside].mean(0)
+    return (true / np.maximum(fitted[inside].mean(0), 1e-12)).astype(np.float32)
+
+
+def scaled_light(light, factors: np.ndarray):
+    """The same light with its radiance multiplied by ``factors`` (3,), per channel."""
+    from roomlight.core.light import Light
+
+    return Light(light.radiance * torch_tensor(factors), light.depth, light.kind, light.frame)
+
+
+def torch_tensor(x: np.ndarray):
+    import torch
+
+    return torch.as_tensor(np.asarray(x, np.float32))
+
+
 def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False,
-                   albedo: bool = False, geometry: bool = False, truth_spp: int = 0) -> list[dict]:
+                   albedo: bool = False, geometry: bool = False, truth_spp: int = 0,
+                   level: bool = False) -> list[dict]:
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import (composite_for_light, insert_truth_stamp, insertion_scores,
                                                            read_insert_truth)
@@ -213,6 +244,9 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
             got = fitted_light(res, case_dir.name, method)
             if got is not None:
                 lights[f"{method} ({res.name})"] = got
+                if level:
+                    factors = level_factors(res, case_dir.name, method, truth)
+                    lights[f"{method} ({res.name}) true level"] = (scaled_light(got[0], factors), got[1])
     rho = true_albedo(case_dir, truth) if albedo else None
     shape = true_geometry(case_dir, truth) if geometry else None
     for name, (light, mats) in lights.items():
@@ -265,6 +299,7 @@ def table(records: list[dict]) -> str:
     pairs += [(v, v.replace("prior (", "prior-envmap (")) for v in variants
               if v.startswith("prior (") and not v.endswith(" true geometry")]
     pairs += [(v, v + " unenclosed") for v in variants if v.startswith("prior (") and v + " unenclosed" in variants]
+    pairs += [(v, v[:-len(" true level")]) for v in variants if v.endswith(" true level")]
     for a, b in pairs:
         cells = []
         for key in SCORES:
@@ -272,7 +307,8 @@ def table(records: list[dict]) -> str:
             cells.append("–" if p is None else f"{p[0]:+.2f} [{p[1]:+.2f}, {p[2]:+.2f}] {p[3]}/{p[4]}")
         lines.append(f"| {a} − {b} | " + " | ".join(cells) + " |")
     # against distance: the lights as the pipeline uses them, not the diagnostic variants
-    plain = [p for p in pairs if all(x not in p[0] + p[1] for x in ("unenclosed", "true albedo", "true geometry"))]
+    plain = [p for p in pairs if all(x not in p[0] + p[1] for x in ("unenclosed", "true albedo", "true geometry"))
+             and ("true level" in p[0]) == ("true level" in p[1])]
     lines += ["", distance_table(records, plain)]
     return "\n".join(lines)
 
@@ -332,6 +368,8 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true", help="each light once: no unenclosed, other-seed or more-samples variant")
     ap.add_argument("--albedo", action="store_true", help="also composite with the local scene's true albedo")
     ap.add_argument("--geometry", action="store_true", help="also composite with the local scene's true shape")
+    ap.add_argument("--level", action="store_true",
+                    help="also composite each fitted light at the true level and colour of its diffuse probes")
     ap.add_argument("--truth-spp", type=int, default=0,
                     help="score against the truth rendered again at this many samples (procedural rooms only; "
                          "truth noise then at --spp)")
@@ -345,7 +383,7 @@ def main(argv=None) -> None:
             continue
         print(f"[{k + 1}/{len(photos)}] {d.name}", file=sys.stderr, flush=True)
         done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick, args.albedo,
-                                     args.geometry, args.truth_spp)
+                                     args.geometry, args.truth_spp, args.level)
         tmp = args.out.with_suffix(".tmp")
         tmp.write_text(json.dumps(done))
         tmp.replace(args.out)
