@@ -14,6 +14,8 @@ interval, and every score's noise floor beside it:
 - ``composite noise``: the same composite with another seed;
 - lights: the room's own panorama as a 2.5D light (``oracle``) and at infinity (``oracle-envmap``), and
   any fitted light of a results folder (``--results DIR``: its ``recovered.exr`` and fitted materials);
+  where the folder has ``prior-ceiling`` (the prior's best latent for the whole true room), that room as a
+  2.5D light and at infinity: what the prior itself can give the 2.5D light, whatever the fit;
 - ``enclose``: the light's surface pushed behind the local scene (roomlight.core.emitter.enclose), or
   left where it is (the pipeline before that fix);
 - ``spp``: the composite's samples per pixel; ``--truth-spp N``: every score against the truth rendered
@@ -164,7 +166,8 @@ def true_geometry(case_dir: Path, truth, max_edge_px: float = 2.0):
 
 
 def fitted_light(results: Path, photo: str, method: str):
-    """(light, materials) of a fitted case of a results folder, or None."""
+    """(light, materials) of a fitted case of a results folder (materials None where it fitted none), or
+    None."""
     from roomlight.core.io import read_panorama
     from roomlight.core.light import Light
 
@@ -175,6 +178,8 @@ def fitted_light(results: Path, photo: str, method: str):
     meta = pano.metadata
     light = Light(pano.radiance, pano.depth if meta["emitter_kind"] == "mesh" else None, meta["emitter_kind"],
                   np.asarray(meta["light_from_camera"], np.float64))
+    if not (cdir / "fit" / "materials.json").is_file():
+        return light, None                    # a reference that fits no materials (prior-ceiling)
     mats = json.loads((cdir / "fit" / "materials.json").read_text())
     entries = mats["objects"] if isinstance(mats, dict) else mats
     materials = {int(e["label"]): {"albedo": e["albedo"], "roughness": e["roughness"], "metallic": e["metallic"]}
@@ -214,6 +219,7 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import (composite_for_light, insert_truth_stamp, insertion_scores,
                                                            read_insert_truth)
+    from roomlight.core.light import Light
     from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
 
     truth = load_truth(case_dir)
@@ -240,11 +246,16 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
     lights = {"oracle": (oracle_light(case_dir, "mesh", truth), true_mats),
               "oracle-envmap": (oracle_light(case_dir, "envmap", truth), true_mats)}
     for res in results:
-        for method in ("prior", "prior-envmap"):
+        for method in ("prior", "prior-envmap", "prior-ceiling"):
             got = fitted_light(res, case_dir.name, method)
             if got is not None:
+                got = (got[0], got[1] if got[1] is not None else true_mats)
                 lights[f"{method} ({res.name})"] = got
-                if level:
+                if method == "prior-ceiling":     # the prior's best room, and the same room at infinity
+                    room = got[0]
+                    lights[f"{method} ({res.name}) at infinity"] = (Light(room.radiance, None, "envmap", room.frame),
+                                                                    got[1])
+                if level and method != "prior-ceiling":
                     factors = level_factors(res, case_dir.name, method, truth)
                     lights[f"{method} ({res.name}) true level"] = (scaled_light(got[0], factors), got[1])
     rho = true_albedo(case_dir, truth) if albedo else None
@@ -300,6 +311,7 @@ def table(records: list[dict]) -> str:
               if v.startswith("prior (") and not v.endswith(" true geometry")]
     pairs += [(v, v + " unenclosed") for v in variants if v.startswith("prior (") and v + " unenclosed" in variants]
     pairs += [(v, v[:-len(" true level")]) for v in variants if v.endswith(" true level")]
+    pairs += [(v, v + " at infinity") for v in variants if v + " at infinity" in variants]
     for a, b in pairs:
         cells = []
         for key in SCORES:
