@@ -116,6 +116,10 @@ def test_the_command_writes_the_composite_and_refuses_bad_input_in_one_line(fitt
             "--out", tmp_path / "env" / "c.png")
     assert r.exit_code == 0, r.output
     assert json.loads((tmp_path / "env" / "insert.json").read_text())["light_kind"] == "envmap"
+    r = run("insert", fitted_dir, "--placements", places, "--exposure", "-1", "--size", "32", "--spp", "4",
+            "--out", tmp_path / "dim" / "c.png")
+    assert r.exit_code == 0 and "-1 EV" in r.output, r.output
+    assert json.loads((tmp_path / "dim" / "insert.json").read_text())["exposure_ev"] == -1.0
     bad_mesh = tmp_path / "broken.obj"
     bad_mesh.write_text("v 0 0 0\nf 1 2 oops\n")
     for args, needle in [(["--at", "100,5"], "outside"), (["--at", "16,-3"], "outside"),
@@ -123,6 +127,7 @@ def test_the_command_writes_the_composite_and_refuses_bad_input_in_one_line(fitt
                          (["--object", "nothing.ply", "--at", "16,20"], "no such mesh"),
                          (["--at", "16,20", "--material", "velvet"], "material"),
                          (["--light", "oracle", "--at", "16,20"], "no such fitted light"),
+                         (["--at", "16,20", "--exposure", "20"], "stops"),
                          ([], "nothing to insert")]:
         r = CliRunner().invoke(cli, ["insert", str(fitted_dir), *args, "--out", str(tmp_path / "x.png")])
         assert r.exit_code != 0, args
@@ -153,6 +158,74 @@ def test_a_diffuse_object_in_a_room_of_uniform_radiance_shades_at_albedo_times_r
     assert inside.sum() >= 6, inside.sum()
     shade = res.composite[inside].mean(0)
     np.testing.assert_allclose(shade, albedo * L, rtol=0.05)
+
+
+def test_exposure_moves_the_light_against_the_objects_albedos_and_refuses_nonsense(fitted_dir):
+    fitted = load_fitted_photo(fitted_dir)
+    brighter = fitted.with_exposure(1.0)
+    assert brighter.exposure_ev == 1.0 and fitted.exposure_ev == 0.0
+    np.testing.assert_allclose(brighter.radiance.numpy(), 2.0 * fitted.radiance.numpy(), rtol=1e-6)
+    for lab, m in fitted.materials.items():
+        np.testing.assert_allclose(brighter.materials[lab]["albedo"], np.asarray(m["albedo"]) / 2.0, rtol=1e-6)
+        assert brighter.materials[lab]["roughness"] == m["roughness"]
+    darker = fitted.with_exposure(-2.0)           # albedos x4, held at 1
+    for lab, m in fitted.materials.items():
+        np.testing.assert_allclose(darker.materials[lab]["albedo"], np.minimum(1.0, 4.0 * np.asarray(m["albedo"])),
+                                   rtol=1e-6)
+    for bad in (float("nan"), 11.0, -40.0):
+        with pytest.raises(RoomlightError, match="stops"):
+            fitted.with_exposure(bad)
+
+
+@pytest.mark.mitsuba
+def test_a_brighter_reading_brightens_the_new_object_as_path_space_says(fitted_dir):
+    """The white furnace of the test above, read with the light 2^EV times as bright. The photograph still
+    shows L everywhere, so the local scene's estimated albedo is 1/s (s = 2^EV) and every surface of the
+    photograph keeps radiance L. A path from the camera to the new object and on to the light picks up the
+    light's s once and 1/s at each bounce on the photograph's surfaces, and with one seed every EV traces
+    the same paths (cosine sampling does not look at albedos, and the path is shorter than Russian
+    roulette's start), so the object's radiance is r(s) = A s + B + C / s + ..., A the light it sees
+    directly. Fitted on s = 2, 4, 8, that law predicts s = 16; and A s is a share of r between 0 and 1."""
+    from roomlight.core.examples import example_room
+    from roomlight.core.light import Light
+
+    base = load_fitted_photo(fitted_dir)
+    L, albedo = 0.6, 0.5
+    h, w = base.radiance.shape[:2]
+    _, room_depth = example_room(h)
+    base.light = Light(torch.full((h, w, 3), L), room_depth * 3.0, "mesh", base.light.frame)
+    base.case.image = np.full_like(base.case.image, L)
+    base.materials = {lab: {**m, "albedo": [1.0, 1.0, 1.0]} for lab in base.materials for m in [base.materials[lab]]}
+    spec = [InsertSpec("sphere", at=(16, 21), scale=0.35, material=f"diffuse:{albedo}")]
+    shade = {}
+    for ev in (1, 2, 3, 4):
+        moved = base.with_exposure(ev)
+        # the fitted objects as Lambertian surfaces of their (moved) albedo, as in the furnace above
+        moved.bsdfs = lambda m=moved: {lab: {"type": "diffuse", "reflectance": {"type": "rgb", "value": v["albedo"]}}
+                                       for lab, v in m.materials.items()}
+        res = insert_objects(moved, spec, size=32, spp=256, seed=3, unseen_share=False)
+        assert res.info["exposure_ev"] == ev
+        # the photograph's own reading is kept: its surfaces read as albedo 1/s and still render at L
+        # (medians: a few pixels at depth edges see the light itself, at s L, in both renders alike)
+        objects = resize_labels(base.case, res.without_objects.shape[:2]) > 0
+        np.testing.assert_allclose(np.median(res.albedo[~objects]), 2.0 ** -ev, rtol=0.06)
+        np.testing.assert_allclose(np.median(res.without_objects[~objects]), L, rtol=0.06)
+        inside = res.coverage > 0.99
+        assert inside.sum() >= 6, inside.sum()
+        shade[2.0 ** ev] = float(res.composite[inside].mean())
+    s = np.array([2.0, 4.0, 8.0])
+    A, B, C = np.linalg.solve(np.stack([s, np.ones(3), 1.0 / s], 1), [shade[x] for x in s])
+    assert shade[16.0] == pytest.approx(16 * A + B + C / 16, rel=0.03), (shade, A, B, C)
+    assert A > 0 and 0.1 < 2 * A / shade[2.0] < 1.0, (A, shade)
+    assert shade[16.0] > 4 * shade[2.0]             # most of its light comes straight from the room
+
+
+def resize_labels(case, shape):
+    """The photograph's object labels at ``shape`` (nearest pixel)."""
+    h, w = shape
+    ii = (np.arange(h) + 0.5) * case.height / h
+    jj = (np.arange(w) + 0.5) * case.width / w
+    return np.asarray(case.objects.labels)[ii.astype(int)[:, None], jj.astype(int)[None, :]]
 
 
 @pytest.mark.mitsuba

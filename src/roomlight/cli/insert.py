@@ -42,6 +42,10 @@ def _floats(n: int, name: str):
                    "instead of or besides --object.")
 @click.option("--light", default=None, metavar="METHOD",
               help="Which fitted light: the fit's own [default] or a compared method's (FIT/compare/METHOD).")
+@click.option("--exposure", "exposure", type=float, default=0.0, show_default=True, metavar="EV",
+              help="Make the fitted light 2^EV times as bright and the photograph's objects 2^EV times "
+                   "darker (the photograph itself unchanged): the photo fit's largest error is the light's "
+                   "level, so if the new objects look too bright next to the real ones, try -1.")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="The composite (sRGB PNG); the EXR, object_mask.png, shadow.png and insert.json go beside it.")
 @click.option("--size", type=click.IntRange(min=8), default=512, show_default=True,
@@ -49,7 +53,7 @@ def _floats(n: int, name: str):
 @click.option("--spp", type=click.IntRange(min=1), default=256, show_default=True,
               help="Samples per pixel of each render.")
 @click.option("--seed", type=int, default=0, show_default=True)
-def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, out, size, spp, seed):
+def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, exposure, out, size, spp, seed):
     """Put objects into the photograph of a `fit-photo` output folder FIT.
 
     The photograph's depth mesh becomes the local scene (the fitted objects keep their fitted
@@ -74,8 +78,11 @@ def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, ou
     if not specs:
         raise RoomlightError("nothing to insert: give --object with --at X,Y (or --at-xyz), or --placements FILE")
     fitted = load_fitted_photo(fit, light)
+    if exposure:
+        fitted = fitted.with_exposure(exposure)
     result = insert_objects(fitted, specs, size=size, spp=spp, seed=seed, say=lambda m: click.echo(m, err=True))
     paths = write_insert_outputs(result, out)
-    click.echo(f"{len(specs)} object(s) inserted under the {fitted.method} light in "
+    level = f" ({exposure:+g} EV)" if exposure else ""
+    click.echo(f"{len(specs)} object(s) inserted under the {fitted.method} light{level} in "
                f"{result.info['timings_s']['total']:.1f} s -> {paths['composite_png']} "
                f"(+ {Path(paths['composite_exr']).name}, object_mask.png, shadow.png, insert.json)")

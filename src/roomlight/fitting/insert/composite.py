@@ -387,7 +387,7 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
             entry["unseen_light_share"] = share
         timings["unseen_share"] = time.perf_counter() - t4
     info = {"light": fitted.method, "light_kind": fitted.kind, "local_scene": local_scene, "fit": str(fitted.folder),
-            "size": [oh, ow],
+            "exposure_ev": float(fitted.exposure_ev), "size": [oh, ow],
             "spp": spp, "seed": seed, "max_depth": max_depth, "albedo_range": list(ALBEDO_RANGE),
             "light_enclosing_scene": {"on": bool(enclose and fitted.depth is not None),
                                       "texels_moved": round(local.enclosed_share, 4)},

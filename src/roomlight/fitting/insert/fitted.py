@@ -11,7 +11,8 @@ files have the same layout.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +39,8 @@ class FittedPhoto:
             rotation, scale, translation, as ``result.json`` records them); the photograph's geometry
             is mapped into the room with these.
         materials: fitted material of each object, by mask label: {albedo: [r, g, b], roughness, metallic}.
+        exposure_ev: how far the light was moved from the fit's reading, in stops (:meth:`with_exposure`;
+            0 = as fitted).
 
     Raises:
         RoomlightError: the light's frame is not ``transform``.
@@ -50,6 +53,7 @@ class FittedPhoto:
     light: Light
     transform: object
     materials: dict[int, dict]
+    exposure_ev: float = 0.0
 
     def __post_init__(self):
         if not np.allclose(self.light.frame, self.transform.matrix):
@@ -69,6 +73,28 @@ class FittedPhoto:
     def depth(self) -> torch.Tensor | None:
         """(H, 2H) metres in the room frame, or None for an env map."""
         return self.light.depth
+
+    def with_exposure(self, ev: float) -> "FittedPhoto":
+        """The same photograph read with a light 2^ev times as bright and objects 2^-ev times as reflective.
+
+        One photograph cannot tell a light from twice that light on half the albedo, and the photo fit's
+        largest error is the light's level (a bright object inserted under too bright a light glows). Moving
+        the split by hand keeps the photograph's own reading: the fitted objects' albedos (base colours,
+        metals included) are divided by what the light is multiplied by, and the other surfaces' albedo,
+        estimated from the photograph under the light, follows by itself. An albedo that would pass 1 is
+        held at 1 (that object then reads brighter than in the photograph).
+
+        Raises:
+            RoomlightError: ``ev`` not finite or outside [-10, 10].
+        """
+        ev = float(ev)
+        if not math.isfinite(ev) or abs(ev) > 10:
+            raise RoomlightError(f"--exposure {ev}: give a number of stops between -10 and 10")
+        gain = 2.0 ** ev
+        light = Light(self.light.radiance * gain, self.light.depth, self.light.kind, self.light.frame)
+        materials = {lab: {**m, "albedo": [min(1.0, float(a) / gain) for a in m["albedo"]]}
+                     for lab, m in self.materials.items()}
+        return replace(self, light=light, materials=materials, exposure_ev=self.exposure_ev + ev)
 
     def bsdfs(self) -> dict[int, dict]:
         """Each fitted object's Mitsuba BSDF dict, by label."""
