@@ -31,10 +31,14 @@ interval, and every score's noise floor beside it:
 - ``true level`` (``--level``): each fitted light scaled, channel by channel, by the factor that gives its
   diffuse probes (the results folder's ``probes_diffuse.exr``) the true mean radiance: the light's level
   and colour made right, its shape left as fitted. Paired with the fitted light at infinity scaled the
-  same way, it says what the 2.5D shape is worth once the level is right.
+  same way, it says what the 2.5D shape is worth once the level is right;
+- ``reference albedo`` (``--reference``): each fitted light set to the level at which one of the photo's
+  own objects (the first dielectric one) has its true mean albedo, the fitted albedos moved against it
+  (``roomlight insert --reference-albedo``, as a user who knows one surface's reflectance would).
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
-         [--hi-spp 256] [--truth-spp N] [--quick] [--albedo] [--geometry] [--level] [--out FILE.json]
+         [--hi-spp 256] [--truth-spp N] [--quick] [--albedo] [--geometry] [--level] [--reference]
+         [--out FILE.json]
 Resumable: each photo's records are kept in ``--out`` as they are made.
 """
 
@@ -200,6 +204,16 @@ def level_factors(results: Path, photo: str, method: str, truth) -> np.ndarray:
     return (true / np.maximum(fitted[inside].mean(0), 1e-12)).astype(np.float32)
 
 
+def reference_gain(materials: dict, truth) -> float | None:
+    """What the light is multiplied by so that the photo's first dielectric object (lowest label, true
+    metallic < 0.5) has its true mean albedo, or None when it has none: fitted / true mean albedo."""
+    for label in sorted(truth.materials):
+        true = truth.materials[label].to_dict()
+        if float(true.get("metallic", 0.0)) < 0.5 and int(label) in materials:
+            return float(np.mean(materials[int(label)]["albedo"])) / max(float(np.mean(true["albedo"])), 1e-6)
+    return None
+
+
 def scaled_light(light, factors: np.ndarray):
     """The same light with its radiance multiplied by ``factors`` (3,), per channel."""
     from roomlight.core.light import Light
@@ -215,7 +229,7 @@ def torch_tensor(x: np.ndarray):
 
 def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False,
                    albedo: bool = False, geometry: bool = False, truth_spp: int = 0,
-                   level: bool = False) -> list[dict]:
+                   level: bool = False, reference: bool = False) -> list[dict]:
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import (composite_for_light, insert_truth_stamp, insertion_scores,
                                                            read_insert_truth)
@@ -258,6 +272,11 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                 if level and method != "prior-ceiling":
                     factors = level_factors(res, case_dir.name, method, truth)
                     lights[f"{method} ({res.name}) true level"] = (scaled_light(got[0], factors), got[1])
+                gain = reference_gain(got[1], truth) if reference and method != "prior-ceiling" else None
+                if gain is not None:
+                    moved = {k: {**m, "albedo": [min(1.0, float(a) / gain) for a in m["albedo"]]}
+                             for k, m in got[1].items()}
+                    lights[f"{method} ({res.name}) reference albedo"] = (scaled_light(got[0], np.full(3, gain)), moved)
     rho = true_albedo(case_dir, truth) if albedo else None
     shape = true_geometry(case_dir, truth) if geometry else None
     for name, (light, mats) in lights.items():
@@ -311,6 +330,7 @@ def table(records: list[dict]) -> str:
               if v.startswith("prior (") and not v.endswith(" true geometry")]
     pairs += [(v, v + " unenclosed") for v in variants if v.startswith("prior (") and v + " unenclosed" in variants]
     pairs += [(v, v[:-len(" true level")]) for v in variants if v.endswith(" true level")]
+    pairs += [(v, v[:-len(" reference albedo")]) for v in variants if v.endswith(" reference albedo")]
     pairs += [(v, v + " at infinity") for v in variants if v + " at infinity" in variants]
     for a, b in pairs:
         cells = []
@@ -320,7 +340,8 @@ def table(records: list[dict]) -> str:
         lines.append(f"| {a} − {b} | " + " | ".join(cells) + " |")
     # against distance: the lights as the pipeline uses them, not the diagnostic variants
     plain = [p for p in pairs if all(x not in p[0] + p[1] for x in ("unenclosed", "true albedo", "true geometry"))
-             and ("true level" in p[0]) == ("true level" in p[1])]
+             and ("true level" in p[0]) == ("true level" in p[1])
+             and ("reference albedo" in p[0]) == ("reference albedo" in p[1])]
     lines += ["", distance_table(records, plain)]
     return "\n".join(lines)
 
@@ -382,6 +403,8 @@ def main(argv=None) -> None:
     ap.add_argument("--geometry", action="store_true", help="also composite with the local scene's true shape")
     ap.add_argument("--level", action="store_true",
                     help="also composite each fitted light at the true level and colour of its diffuse probes")
+    ap.add_argument("--reference", action="store_true",
+                    help="also composite each fitted light at the level where one photo object has its true albedo")
     ap.add_argument("--truth-spp", type=int, default=0,
                     help="score against the truth rendered again at this many samples (procedural rooms only; "
                          "truth noise then at --spp)")
@@ -395,7 +418,8 @@ def main(argv=None) -> None:
             continue
         print(f"[{k + 1}/{len(photos)}] {d.name}", file=sys.stderr, flush=True)
         done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick, args.albedo,
-                                     args.geometry, args.truth_spp, args.level)
+                                     args.geometry, args.truth_spp, args.level,
+                                     args.reference)
         tmp = args.out.with_suffix(".tmp")
         tmp.write_text(json.dumps(done))
         tmp.replace(args.out)

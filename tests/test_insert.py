@@ -118,8 +118,20 @@ def test_the_command_writes_the_composite_and_refuses_bad_input_in_one_line(fitt
     assert json.loads((tmp_path / "env" / "insert.json").read_text())["light_kind"] == "envmap"
     r = run("insert", fitted_dir, "--placements", places, "--exposure", "-1", "--size", "32", "--spp", "4",
             "--out", tmp_path / "dim" / "c.png")
-    assert r.exit_code == 0 and "-1 EV" in r.output, r.output
+    assert r.exit_code == 0 and "-1.00 EV" in r.output, r.output
     assert json.loads((tmp_path / "dim" / "insert.json").read_text())["exposure_ev"] == -1.0
+    # a known albedo in the photograph sets the level: the fitted object then reflects exactly that
+    fitted = load_fitted_photo(fitted_dir)
+    label = sorted(fitted.materials)[0]
+    fitted_albedo = float(np.mean(fitted.materials[label]["albedo"]))
+    r = run("insert", fitted_dir, "--placements", places, "--reference-albedo", f"{label}=0.8", "--size", "32",
+            "--spp", "4", "--out", tmp_path / "ref" / "c.png")
+    assert r.exit_code == 0, r.output
+    info = json.loads((tmp_path / "ref" / "insert.json").read_text())
+    assert info["reference_albedo"] == {"label": label, "albedo": 0.8}
+    assert info["exposure_ev"] == pytest.approx(np.log2(fitted_albedo / 0.8), abs=1e-9)
+    moved = fitted.with_exposure(info["exposure_ev"])
+    assert np.mean(moved.materials[label]["albedo"]) == pytest.approx(0.8, rel=1e-6)
     bad_mesh = tmp_path / "broken.obj"
     bad_mesh.write_text("v 0 0 0\nf 1 2 oops\n")
     for args, needle in [(["--at", "100,5"], "outside"), (["--at", "16,-3"], "outside"),
@@ -128,6 +140,9 @@ def test_the_command_writes_the_composite_and_refuses_bad_input_in_one_line(fitt
                          (["--at", "16,20", "--material", "velvet"], "material"),
                          (["--light", "oracle", "--at", "16,20"], "no such fitted light"),
                          (["--at", "16,20", "--exposure", "20"], "stops"),
+                         (["--at", "16,20", "--reference-albedo", "7=0.5"], "no object 7"),
+                         (["--at", "16,20", "--reference-albedo", "1=1.5"], "(0, 1]"),
+                         (["--at", "16,20", "--reference-albedo", "white"], "LABEL=ALBEDO"),
                          ([], "nothing to insert")]:
         r = CliRunner().invoke(cli, ["insert", str(fitted_dir), *args, "--out", str(tmp_path / "x.png")])
         assert r.exit_code != 0, args

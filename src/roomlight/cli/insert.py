@@ -46,6 +46,10 @@ def _floats(n: int, name: str):
               help="Make the fitted light 2^EV times as bright and the photograph's objects 2^EV times "
                    "darker (the photograph itself unchanged): the photo fit's largest error is the light's "
                    "level, so if the new objects look too bright next to the real ones, try -1.")
+@click.option("--reference-albedo", "reference", default=None, metavar="LABEL=ALBEDO",
+              help="Object LABEL of the photograph's mask is known to reflect ALBEDO (its mean over R, G, B; "
+                   "a grey card, white paper): the light's level is set so that it does (--exposure is "
+                   "then added on top).")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="The composite (sRGB PNG); the EXR, object_mask.png, shadow.png and insert.json go beside it.")
 @click.option("--size", type=click.IntRange(min=8), default=512, show_default=True,
@@ -53,7 +57,8 @@ def _floats(n: int, name: str):
 @click.option("--spp", type=click.IntRange(min=1), default=256, show_default=True,
               help="Samples per pixel of each render.")
 @click.option("--seed", type=int, default=0, show_default=True)
-def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, exposure, out, size, spp, seed):
+def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, exposure, reference, out, size,
+            spp, seed):
     """Put objects into the photograph of a `fit-photo` output folder FIT.
 
     The photograph's depth mesh becomes the local scene (the fitted objects keep their fitted
@@ -78,11 +83,20 @@ def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, ex
     if not specs:
         raise RoomlightError("nothing to insert: give --object with --at X,Y (or --at-xyz), or --placements FILE")
     fitted = load_fitted_photo(fit, light)
+    if reference is not None:
+        label, _, value = reference.partition("=")
+        try:
+            label, value = int(label), float(value)
+        except ValueError:
+            raise RoomlightError(f"--reference-albedo {reference!r}: write LABEL=ALBEDO, e.g. 2=0.8") from None
+        exposure += fitted.exposure_for_albedo(label, value)
     if exposure:
         fitted = fitted.with_exposure(exposure)
     result = insert_objects(fitted, specs, size=size, spp=spp, seed=seed, say=lambda m: click.echo(m, err=True))
+    if reference is not None:
+        result.info["reference_albedo"] = {"label": label, "albedo": value}
     paths = write_insert_outputs(result, out)
-    level = f" ({exposure:+g} EV)" if exposure else ""
+    level = f" ({exposure:+.2f} EV)" if exposure else ""
     click.echo(f"{len(specs)} object(s) inserted under the {fitted.method} light{level} in "
                f"{result.info['timings_s']['total']:.1f} s -> {paths['composite_png']} "
                f"(+ {Path(paths['composite_exr']).name}, object_mask.png, shadow.png, insert.json)")

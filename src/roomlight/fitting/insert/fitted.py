@@ -96,6 +96,26 @@ class FittedPhoto:
                      for lab, m in self.materials.items()}
         return replace(self, light=light, materials=materials, exposure_ev=self.exposure_ev + ev)
 
+    def exposure_for_albedo(self, label: int, albedo: float) -> float:
+        """The exposure (stops, for :meth:`with_exposure`) at which object ``label`` of the photograph has
+        the mean albedo ``albedo`` over R, G, B: a surface of known reflectance in the photograph (a grey
+        card, white paper, a painted wall of known paint) fixes the light's level that one photograph
+        leaves open.
+
+        Raises:
+            RoomlightError: no such object, ``albedo`` outside (0, 1], or a fitted albedo of zero.
+        """
+        if int(label) not in self.materials:
+            known = ", ".join(str(k) for k in sorted(self.materials)) or "none"
+            raise RoomlightError(f"--reference-albedo: the photograph has no object {label} (its objects: {known})")
+        albedo = float(albedo)
+        if not (math.isfinite(albedo) and 0.0 < albedo <= 1.0):
+            raise RoomlightError(f"--reference-albedo: an albedo is in (0, 1], got {albedo}")
+        fitted = float(np.mean(self.materials[int(label)]["albedo"]))
+        if fitted <= 0.0:
+            raise RoomlightError(f"--reference-albedo: object {label} was fitted black; it cannot set the level")
+        return math.log2(fitted / albedo)
+
     def bsdfs(self) -> dict[int, dict]:
         """Each fitted object's Mitsuba BSDF dict, by label."""
         from roomlight.core.render.materials import principled_bsdf
