@@ -322,6 +322,42 @@ def test_export_of_a_photo_fit_carries_the_camera_the_depth_mesh_and_the_backpla
     np.testing.assert_allclose(cam_node.translation, fitted.transform.translation, atol=1e-6)
 
 
+@pytest.mark.mitsuba
+def test_export_moves_the_lights_level_as_insert_does(fitted_dir, tmp_path):
+    """--exposure and --reference-albedo scale the exported light's float radiance by exactly the factor
+    insert renders with, and the file records the stops; a folder that is no photo fit is refused."""
+    pytest.importorskip("pygltflib")
+    import pygltflib
+
+    from roomlight.core.io import read_exr
+    from roomlight.fitting.insert import load_fitted_photo
+
+    def radiance(path):
+        ch = read_exr(path)
+        return np.stack([ch[c] for c in "RGB"], -1)
+
+    assert run("export", fitted_dir, "--out", tmp_path / "as" / "l.glb").exit_code == 0
+    r = run("export", fitted_dir, "--out", tmp_path / "dim" / "l.glb", "--exposure", "-1.5")
+    assert r.exit_code == 0 and "-1.50 EV" in r.output, r.output
+    base = radiance(tmp_path / "as" / "l_radiance.exr")
+    np.testing.assert_allclose(radiance(tmp_path / "dim" / "l_radiance.exr"), base * 2.0 ** -1.5, rtol=1e-6)
+    extras = pygltflib.GLTF2().load(str(tmp_path / "dim" / "l.glb")).extras
+    assert "exposure_ev" not in pygltflib.GLTF2().load(str(tmp_path / "as" / "l.glb")).extras["roomlight"]
+    assert extras["roomlight"]["exposure_ev"] == -1.5
+    fitted = load_fitted_photo(fitted_dir)
+    label = sorted(fitted.materials)[0]
+    gain = 0.5 / float(np.mean(fitted.materials[label]["albedo"]))     # the light's factor for albedo 0.5
+    r = run("export", fitted_dir, "--out", tmp_path / "ref" / "l.glb", "--reference-albedo", f"{label}=0.5")
+    assert r.exit_code == 0, r.output
+    np.testing.assert_allclose(radiance(tmp_path / "ref" / "l_radiance.exr"), base / gain, rtol=1e-5)
+    bundle = fitted_dir / "emitter"
+    for args, needle in [([bundle, "--reference-albedo", "1=0.5"], "fit-photo"),
+                         ([fitted_dir, "--reference-albedo", "x"], "LABEL=ALBEDO"),
+                         ([fitted_dir, "--exposure", "11"], "stops")]:
+        r = CliRunner().invoke(cli, ["export", *map(str, args), "--out", str(tmp_path / "bad.glb")])
+        assert r.exit_code != 0 and needle in r.output and "Traceback" not in r.output, (args, r.output)
+
+
 # ----------------------------------------------------------------------------- in the viewer
 @pytest.mark.slow
 @pytest.mark.mitsuba

@@ -148,6 +148,16 @@ class InputError(click.ClickException):
         click.echo(f"error: {self.format_message()}", err=True)
 
 
+def parse_reference_albedo(text: str) -> tuple[int, float]:
+    """``--reference-albedo LABEL=ALBEDO`` as (label, albedo); a one-line error for anything else (the
+    albedo's range and the label's existence are checked where the photograph is known)."""
+    label, _, value = str(text).partition("=")
+    try:
+        return int(label), float(value)
+    except ValueError:
+        raise RoomlightError(f"--reference-albedo {text!r}: write LABEL=ALBEDO, e.g. 2=0.8") from None
+
+
 def fail(message: str) -> None:
     """Stop the command with a one-line error (exit code 2), no stack trace."""
     raise InputError(message)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from roomlight.errors import RoomlightError
 from roomlight.export.formats import FORMATS
 
 
@@ -16,7 +17,14 @@ from roomlight.export.formats import FORMATS
 @click.option("--out", "out", default=None, type=click.Path(dir_okay=False),
               help="The file to write (light.glb, light.usda / .usd / .usdc, light.obj) [default, for a folder "
                    "and --format: PATH/export/light.<format>].")
-def command(path, fmt, out):
+@click.option("--exposure", type=float, default=0.0, show_default=True, metavar="EV",
+              help="Export the light 2^EV times as bright (what `roomlight insert --exposure` renders with: "
+                   "the photo fit's largest error is the light's level).")
+@click.option("--reference-albedo", "reference", default=None, metavar="LABEL=ALBEDO",
+              help="A fit-photo folder only: set the light's level so that object LABEL of the photograph "
+                   "has mean albedo ALBEDO, as `roomlight insert --reference-albedo` does (--exposure is "
+                   "added on top).")
+def command(path, fmt, out, exposure, reference):
     """Export the light at PATH (an emitter bundle, fit or fit-photo output, sample or benchmark case).
 
     A fit-photo folder also gives the photograph's camera (pose and intrinsics), its depth mesh
@@ -41,6 +49,17 @@ def command(path, fmt, out):
         raise click.BadParameter(f"cannot tell the format from {out!r}; pass --format {'|'.join(FORMATS)}",
                                  param_hint="--out")
     light = load_light(path)
+    if reference is not None:
+        from roomlight.cli.common import parse_reference_albedo
+        from roomlight.export.bundle import is_photo_fit
+        from roomlight.fitting.insert import load_fitted_photo
+
+        if not (Path(path).is_dir() and is_photo_fit(Path(path))):
+            raise RoomlightError(f"--reference-albedo needs a fit-photo output folder; {path} is not one")
+        label, value = parse_reference_albedo(reference)
+        exposure += load_fitted_photo(path).exposure_for_albedo(label, value)
+    if exposure:
+        light = light.with_exposure(exposure)
     files = export_light(light, out, fmt)
     if light.camera is not None and "intrinsics" in light.camera and Path(out).suffix.lower() != ".obj":
         import shutil
@@ -49,6 +68,7 @@ def command(path, fmt, out):
 
         files["blender_script"] = Path(out).with_name(f"{Path(out).stem}_blender.py")
         shutil.copyfile(blender_setup.__file__, files["blender_script"])
-    click.echo(f"{light.source} -> {out}")
+    level = f" ({exposure:+.2f} EV)" if exposure else ""
+    click.echo(f"{light.source}{level} -> {out}")
     for name, p in files.items():
         click.echo(f"  {name:<9} {p} ({p.stat().st_size / 1e3:.0f} kB)")

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+from roomlight.cli.common import parse_reference_albedo
+
 
 def _floats(n: int, name: str):
     def convert(ctx, param, value):
@@ -84,11 +86,7 @@ def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, ex
         raise RoomlightError("nothing to insert: give --object with --at X,Y (or --at-xyz), or --placements FILE")
     fitted = load_fitted_photo(fit, light)
     if reference is not None:
-        label, _, value = reference.partition("=")
-        try:
-            label, value = int(label), float(value)
-        except ValueError:
-            raise RoomlightError(f"--reference-albedo {reference!r}: write LABEL=ALBEDO, e.g. 2=0.8") from None
+        label, value = parse_reference_albedo(reference)
         exposure += fitted.exposure_for_albedo(label, value)
     if exposure:
         fitted = fitted.with_exposure(exposure)

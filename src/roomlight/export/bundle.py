@@ -74,6 +74,25 @@ class LightSource:
         """(H, 2H) float32 radial depth, metres (the light's, as numpy)."""
         return self.light.depth.numpy()
 
+    def with_exposure(self, ev: float) -> "LightSource":
+        """The same light 2^ev times as bright (mesh, camera, objects and backplate unchanged); the stops
+        are added to ``metadata["exposure_ev"]``, which the exported files record.
+
+        Raises:
+            RoomlightError: ``ev`` not finite or outside [-10, 10].
+        """
+        import math
+        from dataclasses import replace
+
+        from roomlight.errors import RoomlightError
+
+        ev = float(ev)
+        if not math.isfinite(ev) or abs(ev) > 10:
+            raise RoomlightError(f"--exposure {ev}: give a number of stops between -10 and 10")
+        light = Light(self.light.radiance * 2.0 ** ev, self.light.depth, self.light.kind, self.light.frame)
+        meta = {**self.metadata, "exposure_ev": float(self.metadata.get("exposure_ev", 0.0)) + ev}
+        return replace(self, light=light, metadata=meta)
+
 
 def _mesh_from_panorama(light: Light):
     from roomlight.core.emitter.area_light import build_area_light
@@ -198,12 +217,13 @@ def load_light(path, scene=None) -> LightSource:
                              "(scene.json)")
     if scene is not None and not light.objects:
         light.objects, light.camera = _scene_objects(load_scene(scene, check_files=False))
-    if p.is_dir() and _is_photo_fit(p):
+    if p.is_dir() and is_photo_fit(p):
         _add_photo(light, p)
     return light
 
 
-def _is_photo_fit(d: Path) -> bool:
+def is_photo_fit(d: Path) -> bool:
+    """Whether folder ``d`` is a `roomlight fit-photo` output (its result.json says so)."""
     try:
         return json.loads((d / "result.json").read_text()).get("format") == "roomlight.photo-fit"
     except (OSError, ValueError, AttributeError):

@@ -52,9 +52,12 @@ def _write_textures(light: LightSource, out: Path, png: bool) -> dict[str, Path]
 
 
 def _extras(light: LightSource, files: dict[str, Path]) -> dict:
-    return {"source": light.source, "emissive_strength": emission_strength(light.radiance),
-            "radiance_exr": files["radiance"].name, "resolution": list(light.radiance.shape[:2]),
-            "units": "metres; linear Rec.709 radiance = srgb_to_linear(texel) * emissive_strength"}
+    extras = {"source": light.source, "emissive_strength": emission_strength(light.radiance),
+              "radiance_exr": files["radiance"].name, "resolution": list(light.radiance.shape[:2]),
+              "units": "metres; linear Rec.709 radiance = srgb_to_linear(texel) * emissive_strength"}
+    if light.metadata.get("exposure_ev"):         # moved by hand from the light's source (export --exposure)
+        extras["exposure_ev"] = float(light.metadata["exposure_ev"])
+    return extras
 
 
 def _quaternion(r: np.ndarray) -> list[float]:
