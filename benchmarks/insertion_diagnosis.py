@@ -35,10 +35,14 @@ interval, and every score's noise floor beside it:
 - ``reference albedo`` (``--reference``): each fitted light set to the level at which one of the photo's
   own objects (the first dielectric one) has its true mean albedo, the fitted albedos moved against it
   (``roomlight insert --reference-albedo``, as a user who knows one surface's reflectance would).
+- ``true depth`` (``--true-depth``): the fitted prior's radiance laid on the room's true shape (each
+  texel's depth the distance from the light's centre to the room along its direction), paired with the
+  fitted light and with its radiance at infinity: whether the fitted room's shape or its radiance (where
+  the lamps and windows are) loses the 2.5D light's lead (procedural rooms only).
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
          [--hi-spp 256] [--truth-spp N] [--quick] [--albedo] [--geometry] [--level] [--reference]
-         [--out FILE.json]
+         [--true-depth] [--out FILE.json]
 Resumable: each photo's records are kept in ``--out`` as they are made.
 """
 
@@ -214,6 +218,41 @@ def reference_gain(materials: dict, truth) -> float | None:
     return None
 
 
+def true_depth_light(case_dir: Path, truth, light):
+    """``light`` (a fitted 2.5D light) with its own radiance but the room's true shape: each texel's depth is
+    the distance, from the light's centre along the texel's direction, to the room's first surface (a ray
+    cast in the room without the photo's objects). A texel whose ray leaves the room keeps its fitted
+    depth. None for a captured-light photo (no room to cast in).
+
+    Which part of the fitted room's error costs the 2.5D light its lead over infinity: its shape (this
+    variant wins it back) or where its light is (this variant does not)."""
+    import drjit as dr
+
+    from roomlight.core.geometry.equirect import pixel_directions
+    from roomlight.core.light import Light, similarity_parts
+    from roomlight.core.render.variant import mitsuba
+
+    built = photo_room(case_dir, truth)
+    if built is None or light.kind != "mesh":
+        return None
+    _, scenes, _ = built
+    mi = mitsuba()
+    s, r, t = similarity_parts(light.frame)          # p_light = s R p_camera + t
+    depth = light.depth.numpy()
+    d_light = pixel_directions(*depth.shape).numpy().reshape(-1, 3).astype(np.float64)
+    m = truth.camera.matrix                          # camera -> world
+    d_world = (d_light @ r) @ m[:3, :3].T            # R^T d, then into the world
+    centre = m[:3, :3] @ (-(r.T @ t) / s) + m[:3, 3]
+    o = np.broadcast_to(centre, d_world.shape)
+    ray = mi.Ray3f(mi.Point3f(*[mi.Float(o[:, k].astype(np.float32)) for k in range(3)]),
+                   mi.Vector3f(*[mi.Float(d_world[:, k].astype(np.float32)) for k in range(3)]))
+    si = scenes.base.ray_intersect(ray)
+    hit = np.asarray(si.is_valid(), bool)
+    dist = np.asarray(si.t, np.float64)
+    true = np.where(hit & np.isfinite(dist), s * dist, depth.reshape(-1)).reshape(depth.shape)
+    return Light(light.radiance, true.astype(np.float32), "mesh", light.frame)
+
+
 def scaled_light(light, factors: np.ndarray):
     """The same light with its radiance multiplied by ``factors`` (3,), per channel."""
     from roomlight.core.light import Light
@@ -229,7 +268,7 @@ def torch_tensor(x: np.ndarray):
 
 def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, quick: bool = False,
                    albedo: bool = False, geometry: bool = False, truth_spp: int = 0,
-                   level: bool = False, reference: bool = False) -> list[dict]:
+                   level: bool = False, reference: bool = False, true_depth: bool = False) -> list[dict]:
     from roomlight.evaluation.photobench import case as fmt
     from roomlight.evaluation.photobench.insertion import (composite_for_light, insert_truth_stamp, insertion_scores,
                                                            read_insert_truth)
@@ -269,6 +308,12 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                     room = got[0]
                     lights[f"{method} ({res.name}) at infinity"] = (Light(room.radiance, None, "envmap", room.frame),
                                                                     got[1])
+                if true_depth and method == "prior":     # the fitted radiance on the room's true shape
+                    shaped = true_depth_light(case_dir, truth, got[0])
+                    if shaped is not None:
+                        lights[f"{method} ({res.name}) true depth"] = (shaped, got[1])
+                        lights[f"{method} ({res.name}) at infinity"] = (
+                            Light(got[0].radiance, None, "envmap", got[0].frame), got[1])
                 if level and method != "prior-ceiling":
                     factors = level_factors(res, case_dir.name, method, truth)
                     lights[f"{method} ({res.name}) true level"] = (scaled_light(got[0], factors), got[1])
@@ -332,6 +377,9 @@ def table(records: list[dict]) -> str:
     pairs += [(v, v[:-len(" true level")]) for v in variants if v.endswith(" true level")]
     pairs += [(v, v[:-len(" reference albedo")]) for v in variants if v.endswith(" reference albedo")]
     pairs += [(v, v + " at infinity") for v in variants if v + " at infinity" in variants]
+    pairs += [(v, v[:-len(" true depth")]) for v in variants if v.endswith(" true depth")]
+    pairs += [(v, v[:-len(" true depth")] + " at infinity") for v in variants
+              if v.endswith(" true depth") and v[:-len(" true depth")] + " at infinity" in variants]
     for a, b in pairs:
         cells = []
         for key in SCORES:
@@ -341,7 +389,8 @@ def table(records: list[dict]) -> str:
     # against distance: the lights as the pipeline uses them, not the diagnostic variants
     plain = [p for p in pairs if all(x not in p[0] + p[1] for x in ("unenclosed", "true albedo", "true geometry"))
              and ("true level" in p[0]) == ("true level" in p[1])
-             and ("reference albedo" in p[0]) == ("reference albedo" in p[1])]
+             and ("reference albedo" in p[0]) == ("reference albedo" in p[1])
+             and ("true depth" in p[0]) == ("true depth" in p[1])]
     lines += ["", distance_table(records, plain)]
     return "\n".join(lines)
 
@@ -405,6 +454,8 @@ def main(argv=None) -> None:
                     help="also composite each fitted light at the true level and colour of its diffuse probes")
     ap.add_argument("--reference", action="store_true",
                     help="also composite each fitted light at the level where one photo object has its true albedo")
+    ap.add_argument("--true-depth", action="store_true",
+                    help="also composite the fitted prior's radiance on the room's true shape, and at infinity")
     ap.add_argument("--truth-spp", type=int, default=0,
                     help="score against the truth rendered again at this many samples (procedural rooms only; "
                          "truth noise then at --spp)")
@@ -419,7 +470,7 @@ def main(argv=None) -> None:
         print(f"[{k + 1}/{len(photos)}] {d.name}", file=sys.stderr, flush=True)
         done[d.name] = diagnose_photo(d, args.results, args.spp, args.hi_spp, args.quick, args.albedo,
                                      args.geometry, args.truth_spp, args.level,
-                                     args.reference)
+                                     args.reference, args.true_depth)
         tmp = args.out.with_suffix(".tmp")
         tmp.write_text(json.dumps(done))
         tmp.replace(args.out)
