@@ -20,15 +20,16 @@ An env-map bundle has no mesh; its ``depth.exr``, when present, makes one.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from roomlight.errors import InputFileError
+from roomlight.errors import InputFileError, RoomlightError
 from roomlight.core.light import Light
 
-__all__ = ["SceneObject", "LightSource", "load_light"]
+__all__ = ["SceneObject", "LightSource", "load_light", "is_photo_fit"]
 
 _SCENE_NAMES = ("scene.json", "scene.yaml", "scene.yml")
 
@@ -81,11 +82,6 @@ class LightSource:
         Raises:
             RoomlightError: ``ev`` not finite or outside [-10, 10].
         """
-        import math
-        from dataclasses import replace
-
-        from roomlight.errors import RoomlightError
-
         ev = float(ev)
         if not math.isfinite(ev) or abs(ev) > 10:
             raise RoomlightError(f"--exposure {ev}: give a number of stops between -10 and 10")
