@@ -35,10 +35,11 @@ interval, and every score's noise floor beside it:
 - ``reference albedo`` (``--reference``): each fitted light set to the level at which one of the photo's
   own objects (the first dielectric one) has its true mean albedo, the fitted albedos moved against it
   (``roomlight insert --reference-albedo``, as a user who knows one surface's reflectance would).
-- ``true depth`` (``--true-depth``): the fitted prior's radiance laid on the room's true shape (each
-  texel's depth the distance from the light's centre to the room along its direction), paired with the
-  fitted light and with its radiance at infinity: whether the fitted room's shape or its radiance (where
-  the lamps and windows are) loses the 2.5D light's lead (procedural rooms only).
+- ``true depth`` / ``true radiance`` (``--true-depth``): the fitted prior's light with its shape, its
+  radiance or both replaced by the true room's as seen from the light's own centre (each texel's depth the
+  distance to the room along its direction, its radiance the room's there), and each radiance at
+  infinity: a two-by-two of radiance and shape that says which of the fitted room's errors loses the 2.5D
+  light's lead over infinity — its shape, or where its light is (procedural rooms only).
 
 Run: .venv/bin/python benchmarks/insertion_diagnosis.py BENCH [--results DIR] [--photos N] [--spp 64]
          [--hi-spp 256] [--truth-spp N] [--quick] [--albedo] [--geometry] [--level] [--reference]
@@ -218,19 +219,23 @@ def reference_gain(materials: dict, truth) -> float | None:
     return None
 
 
-def true_depth_light(case_dir: Path, truth, light):
-    """``light`` (a fitted 2.5D light) with its own radiance but the room's true shape: each texel's depth is
-    the distance, from the light's centre along the texel's direction, to the room's first surface (a ray
-    cast in the room without the photo's objects). A texel whose ray leaves the room keeps its fitted
-    depth. None for a captured-light photo (no room to cast in).
+def room_from_light_centre(case_dir: Path, truth, light, oracle_seed: int = 7):
+    """The true room as seen from a 2.5D light's own centre, texel by texel of the light's panorama: the
+    depth (light units) of the room's first surface along each texel's direction (a ray cast in the room
+    without the photo's objects; a ray that leaves the room keeps the light's own depth) and the radiance
+    the room sends to the light's centre from there (the room path-traced as the oracle panorama is, from
+    that centre). None for a captured-light photo (no room to cast in) or a light with no depth.
 
-    Which part of the fitted room's error costs the 2.5D light its lead over infinity: its shape (this
-    variant wins it back) or where its light is (this variant does not)."""
-    import drjit as dr
+    Returns:
+        (radiance (H, 2H, 3), depth (H, 2H)) float32, in the light's frame and units.
+    """
+    import torch
 
-    from roomlight.core.geometry.equirect import pixel_directions
-    from roomlight.core.light import Light, similarity_parts
+    from roomlight.core.geometry.equirect import pixel_directions, sample_equirect
+    from roomlight.core.light import similarity_parts
     from roomlight.core.render.variant import mitsuba
+    from roomlight.datagen.synth.camera import render_radiance
+    from roomlight.evaluation.photobench import case as fmt
 
     built = photo_room(case_dir, truth)
     if built is None or light.kind != "mesh":
@@ -247,10 +252,20 @@ def true_depth_light(case_dir: Path, truth, light):
     ray = mi.Ray3f(mi.Point3f(*[mi.Float(o[:, k].astype(np.float32)) for k in range(3)]),
                    mi.Vector3f(*[mi.Float(d_world[:, k].astype(np.float32)) for k in range(3)]))
     si = scenes.base.ray_intersect(ray)
-    hit = np.asarray(si.is_valid(), bool)
     dist = np.asarray(si.t, np.float64)
-    true = np.where(hit & np.isfinite(dist), s * dist, depth.reshape(-1)).reshape(depth.shape)
-    return Light(light.radiance, true.astype(np.float32), "mesh", light.frame)
+    hit = np.asarray(si.is_valid(), bool) & np.isfinite(dist)
+    true_depth = np.where(hit, s * dist, depth.reshape(-1))
+    # the room's radiance path-traced from the light's own centre (world axes, twice the light's
+    # resolution, the oracle's samples and exposure), then read in each texel's direction
+    record = json.loads((case_dir / fmt.RECORD).read_text())
+    height = 2 * depth.shape[0]
+    pano = render_radiance(scenes.base, centre, height=height, spp=int(record["config"].get("oracle_spp", 256)),
+                           seed=oracle_seed) * float(record["exposure"])
+    looked = sample_equirect(torch.as_tensor(pano, dtype=torch.float32).permute(2, 0, 1)[None],
+                             torch.as_tensor(d_world, dtype=torch.float32))
+    radiance = looked[0].numpy().T
+    shape = depth.shape
+    return radiance.reshape(*shape, 3).astype(np.float32), true_depth.reshape(shape).astype(np.float32)
 
 
 def scaled_light(light, factors: np.ndarray):
@@ -308,12 +323,14 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                     room = got[0]
                     lights[f"{method} ({res.name}) at infinity"] = (Light(room.radiance, None, "envmap", room.frame),
                                                                     got[1])
-                if true_depth and method == "prior":     # the fitted radiance on the room's true shape
-                    shaped = true_depth_light(case_dir, truth, got[0])
-                    if shaped is not None:
-                        lights[f"{method} ({res.name}) true depth"] = (shaped, got[1])
-                        lights[f"{method} ({res.name}) at infinity"] = (
-                            Light(got[0].radiance, None, "envmap", got[0].frame), got[1])
+                seen = room_from_light_centre(case_dir, truth, got[0]) if true_depth and method == "prior" else None
+                if seen is not None:                   # radiance and shape, fitted or true, crossed
+                    fitted, frame, key = got[0], got[0].frame, f"{method} ({res.name})"
+                    lights[f"{key} at infinity"] = (Light(fitted.radiance, None, "envmap", frame), got[1])
+                    lights[f"{key} true depth"] = (Light(fitted.radiance, seen[1], "mesh", frame), got[1])
+                    lights[f"{key} true radiance"] = (Light(seen[0], fitted.depth, "mesh", frame), got[1])
+                    lights[f"{key} true radiance true depth"] = (Light(seen[0], seen[1], "mesh", frame), got[1])
+                    lights[f"{key} true radiance at infinity"] = (Light(seen[0], None, "envmap", frame), got[1])
                 if level and method != "prior-ceiling":
                     factors = level_factors(res, case_dir.name, method, truth)
                     lights[f"{method} ({res.name}) true level"] = (scaled_light(got[0], factors), got[1])
@@ -380,6 +397,8 @@ def table(records: list[dict]) -> str:
     pairs += [(v, v[:-len(" true depth")]) for v in variants if v.endswith(" true depth")]
     pairs += [(v, v[:-len(" true depth")] + " at infinity") for v in variants
               if v.endswith(" true depth") and v[:-len(" true depth")] + " at infinity" in variants]
+    pairs += [(v, v[:-len(" true radiance")]) for v in variants if v.endswith(" true radiance")]
+    pairs = [p for p in pairs if all(any(r["variant"] == x for r in records) for x in p)]
     for a, b in pairs:
         cells = []
         for key in SCORES:
