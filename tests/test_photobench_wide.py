@@ -107,7 +107,7 @@ def test_a_wide_build_is_what_its_plans_ask_for(tmp_path):
 
     lights = _captured_panorama(tmp_path / "lights")
     cfg = suite_config("wide", n=3, width=128, height=96, spp=8, probe_spp=16, oracle_height=16, oracle_spp=8,
-                       probes=2)
+                       insert_spp=32, probes=2)   # a small clean insertion truth: its size is not what is tested
     result = make_photo_benchmark(tmp_path / "wide", cfg, progress=False, captured_lights=lights)
     assert not result["failed"], result["failed"]
     for i in range(3):
