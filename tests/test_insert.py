@@ -105,6 +105,9 @@ def test_the_command_writes_the_composite_and_refuses_bad_input_in_one_line(fitt
         assert (out.parent / name).is_file(), name
     info = json.loads((out.parent / "insert.json").read_text())
     assert info["light"] == "prior" and len(info["objects"]) == 1 and info["size"] == [24, 32]
+    share = info["objects"][0]["unseen_light_share"]       # printed as the percentage insert.json holds
+    assert f"object 1 (blob): {min(max(share, 0.0), 1.0):.0%} of its shading from parts of the room" in r.output
+    assert ("prior's guess" in r.output) == (share >= 0.5), r.output
     from PIL import Image
 
     mask = np.asarray(Image.open(out.parent / "object_mask.png"))

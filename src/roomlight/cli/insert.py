@@ -9,6 +9,10 @@ import click
 from roomlight.cli.common import parse_reference_albedo
 
 
+#: an object lit at least this much by the light's unseen part gets a word of caution
+UNSEEN_WARNING = 0.5
+
+
 def _floats(n: int, name: str):
     def convert(ctx, param, value):
         if value is None:
@@ -98,3 +102,12 @@ def command(fit, obj, at, at_xyz, scale, rotate, material, placements, light, ex
     click.echo(f"{len(specs)} object(s) inserted under the {fitted.method} light{level} in "
                f"{result.info['timings_s']['total']:.1f} s -> {paths['composite_png']} "
                f"(+ {Path(paths['composite_exr']).name}, object_mask.png, shadow.png, insert.json)")
+    shares = [o.get("unseen_light_share") for o in result.info["objects"]]
+    for k, (o, share) in enumerate(zip(result.info["objects"], shares)):
+        if share is not None:
+            click.echo(f"  object {k + 1} ({Path(str(o['object'])).name}): {min(max(share, 0.0), 1.0):.0%} of its "
+                       "shading from parts of the room the photograph does not show")
+    if any(share is not None and share >= UNSEEN_WARNING for share in shares):
+        click.echo("  where that share is large, the object's look is the prior's guess of the unseen room, the "
+                   "photo fit's least certain part: compare it with a real object of the photograph "
+                   "(docs/troubleshooting.md)")
