@@ -289,6 +289,7 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                                                            read_insert_truth)
     from roomlight.core.light import Light
     from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
+    from roomlight.fitting.insert.fitted import albedos_divided
 
     truth = load_truth(case_dir)
     image, labels, objects = read_insert_truth(case_dir / fmt.TRUTH)
@@ -336,9 +337,8 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
                     lights[f"{method} ({res.name}) true level"] = (scaled_light(got[0], factors), got[1])
                 gain = reference_gain(got[1], truth) if reference and method != "prior-ceiling" else None
                 if gain is not None:
-                    moved = {k: {**m, "albedo": [min(1.0, float(a) / gain) for a in m["albedo"]]}
-                             for k, m in got[1].items()}
-                    lights[f"{method} ({res.name}) reference albedo"] = (scaled_light(got[0], np.full(3, gain)), moved)
+                    lights[f"{method} ({res.name}) reference albedo"] = (scaled_light(got[0], np.full(3, gain)),
+                                                                         albedos_divided(got[1], gain))
     rho = true_albedo(case_dir, truth) if albedo else None
     shape = true_geometry(case_dir, truth) if geometry else None
     for name, (light, mats) in lights.items():

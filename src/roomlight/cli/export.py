@@ -51,13 +51,11 @@ def command(path, fmt, out, exposure, reference):
     light = load_light(path)
     if reference is not None:
         from roomlight.cli.common import parse_reference_albedo
-        from roomlight.export.bundle import is_photo_fit
-        from roomlight.fitting.insert import load_fitted_photo
 
-        if not (Path(path).is_dir() and is_photo_fit(Path(path))):
+        if light.photo is None:
             raise RoomlightError(f"--reference-albedo needs a fit-photo output folder; {path} is not one")
         label, value = parse_reference_albedo(reference)
-        exposure += load_fitted_photo(path).exposure_for_albedo(label, value)
+        exposure += light.photo.exposure_for_albedo(label, value)
     if exposure:
         light = light.with_exposure(exposure)
     files = export_light(light, out, fmt)

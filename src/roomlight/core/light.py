@@ -20,6 +20,7 @@ arrays are converted on the way in and :meth:`Light.to_numpy` gives them back wi
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -137,6 +138,18 @@ class Light:
     def to_numpy(self) -> tuple[np.ndarray, np.ndarray | None]:
         """(radiance (H, 2H, 3), depth (H, 2H) or None) as float32 numpy arrays sharing the tensors' memory."""
         return self.radiance.numpy(), None if self.depth is None else self.depth.numpy()
+
+    def with_exposure(self, ev: float) -> Light:
+        """The same light 2^ev times as bright (``ev`` in stops; depth, kind and frame unchanged).
+
+        Raises:
+            RoomlightError: ``ev`` not finite or outside [-10, 10] (a factor of a thousand either way is
+                more than any fit's level is off by: a larger one is a typing slip).
+        """
+        ev = float(ev)
+        if not math.isfinite(ev) or abs(ev) > 10:
+            raise RoomlightError(f"--exposure {ev}: give a number of stops between -10 and 10")
+        return replace(self, radiance=self.radiance * 2.0 ** ev)
 
     def with_frame(self, frame) -> Light:
         """The same maps and kind with another (4, 4) frame."""

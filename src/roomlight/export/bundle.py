@@ -20,16 +20,19 @@ An env-map bundle has no mesh; its ``depth.exr``, when present, makes one.
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roomlight.errors import InputFileError, RoomlightError
+from roomlight.errors import InputFileError
 from roomlight.core.light import Light
 
-__all__ = ["SceneObject", "LightSource", "load_light", "is_photo_fit"]
+if TYPE_CHECKING:
+    from roomlight.fitting.insert.fitted import FittedPhoto
+
+__all__ = ["SceneObject", "LightSource", "load_light"]
 
 _SCENE_NAMES = ("scene.json", "scene.yaml", "scene.yml")
 
@@ -64,6 +67,8 @@ class LightSource:
     metadata: dict = field(default_factory=dict)
     #: (h, w, 3) linear RGB seen by ``camera`` (a fit-photo's photograph), or None
     backplate: np.ndarray | None = None
+    #: the fit-photo output the light was read from (its objects' fitted materials), or None
+    photo: FittedPhoto | None = None
 
     @property
     def radiance(self) -> np.ndarray:
@@ -80,13 +85,10 @@ class LightSource:
         are added to ``metadata["exposure_ev"]``, which the exported files record.
 
         Raises:
-            RoomlightError: ``ev`` not finite or outside [-10, 10].
+            RoomlightError: ``ev`` not finite or outside [-10, 10] (:meth:`Light.with_exposure`).
         """
-        ev = float(ev)
-        if not math.isfinite(ev) or abs(ev) > 10:
-            raise RoomlightError(f"--exposure {ev}: give a number of stops between -10 and 10")
-        light = Light(self.light.radiance * 2.0 ** ev, self.light.depth, self.light.kind, self.light.frame)
-        meta = {**self.metadata, "exposure_ev": float(self.metadata.get("exposure_ev", 0.0)) + ev}
+        light = self.light.with_exposure(ev)
+        meta = {**self.metadata, "exposure_ev": float(self.metadata.get("exposure_ev", 0.0)) + float(ev)}
         return replace(self, light=light, metadata=meta)
 
 
@@ -213,13 +215,12 @@ def load_light(path, scene=None) -> LightSource:
                              "(scene.json)")
     if scene is not None and not light.objects:
         light.objects, light.camera = _scene_objects(load_scene(scene, check_files=False))
-    if p.is_dir() and is_photo_fit(p):
+    if p.is_dir() and _is_photo_fit(p):
         _add_photo(light, p)
     return light
 
 
-def is_photo_fit(d: Path) -> bool:
-    """Whether folder ``d`` is a `roomlight fit-photo` output (its result.json says so)."""
+def _is_photo_fit(d: Path) -> bool:
     try:
         return json.loads((d / "result.json").read_text()).get("format") == "roomlight.photo-fit"
     except (OSError, ValueError, AttributeError):
@@ -232,6 +233,7 @@ def _add_photo(light: LightSource, folder: Path) -> None:
     from roomlight.fitting.photo.geometry import build_geometry
 
     fitted = load_fitted_photo(folder)
+    light.photo = fitted
     case, t = fitted.case, fitted.transform
     geo = build_geometry(case, fitted.config)
     light.objects = [SceneObject("depth_mesh", t.points(geo.mesh.vertices).astype(np.float32),

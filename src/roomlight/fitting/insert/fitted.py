@@ -21,7 +21,13 @@ import torch
 from roomlight.errors import InputFileError, RoomlightError
 from roomlight.core.light import Light
 
-__all__ = ["FittedPhoto", "load_fitted_photo", "fitted_lights"]
+__all__ = ["FittedPhoto", "load_fitted_photo", "fitted_lights", "albedos_divided"]
+
+
+def albedos_divided(materials: dict, gain: float) -> dict:
+    """Fitted objects' materials (by label, each with an ``albedo`` list) with every albedo divided by
+    ``gain`` and held at 1: what the photograph says of them under a light ``gain`` times as bright."""
+    return {lab: {**m, "albedo": [min(1.0, float(a) / gain) for a in m["albedo"]]} for lab, m in materials.items()}
 
 
 @dataclass
@@ -87,14 +93,9 @@ class FittedPhoto:
         Raises:
             RoomlightError: ``ev`` not finite or outside [-10, 10].
         """
-        ev = float(ev)
-        if not math.isfinite(ev) or abs(ev) > 10:
-            raise RoomlightError(f"--exposure {ev}: give a number of stops between -10 and 10")
-        gain = 2.0 ** ev
-        light = Light(self.light.radiance * gain, self.light.depth, self.light.kind, self.light.frame)
-        materials = {lab: {**m, "albedo": [min(1.0, float(a) / gain) for a in m["albedo"]]}
-                     for lab, m in self.materials.items()}
-        return replace(self, light=light, materials=materials, exposure_ev=self.exposure_ev + ev)
+        light = self.light.with_exposure(ev)
+        return replace(self, light=light, materials=albedos_divided(self.materials, 2.0 ** float(ev)),
+                       exposure_ev=self.exposure_ev + float(ev))
 
     def exposure_for_albedo(self, label: int, albedo: float) -> float:
         """The exposure (stops, for :meth:`with_exposure`) at which object ``label`` of the photograph has
