@@ -60,6 +60,10 @@ class PhotoFitConfig(FitConfig):
     room_albedo_points: int = 512         #: visible room points the bound is checked at (a fixed random subset)
     room_albedo_trim: float = 0.1         #: share of those points breaking the bound most that are left out (lamps, screens)
     room_albedo_moves: str = "light"      #: what the bound may move: the whole light, or its exposure (its brightness) only
+    shadow_receivers: bool = False        #: fit the surface each object stands on as a receiver of its shadow (fitting/photo/receivers.py)
+    lambda_receivers: float = 1.0         #: weight of the receivers' image term
+    receiver_radius: float = 0.5          #: a receiver reaches this many object sizes (image bounding box) from its object
+    receiver_min_up: float = 0.7          #: a receiver pixel's normal has at least this cosine with the room's up
     #: the white balance beside the exposure (FitConfig.white_balance) is off for photos: measured on the
     #: photo benchmark it raised the probes' colour error by 1.4-3.0 degrees and gained nothing
     #: (docs/results.md#white-balance); --set white_balance=true turns it on
@@ -94,6 +98,8 @@ class PhotoFitConfig(FitConfig):
              "room_albedo_range must be [lo, hi] with 0 < lo < hi"),
             (0 <= self.room_albedo_trim < 1, "room_albedo_trim must be in [0, 1)"),
             (self.room_albedo_moves in ("exposure", "light"), "room_albedo_moves must be exposure or light"),
+            (self.lambda_receivers >= 0 and self.receiver_radius > 0, "lambda_receivers >= 0 and receiver_radius > 0"),
+            (-1 <= self.receiver_min_up < 1, "receiver_min_up must be in [-1, 1)"),
             (len(self.albedo_range) == 2 and 0.0 <= self.albedo_range[0] < 0.5 < self.albedo_range[1] <= 1.0,
              "albedo_range must be [lo, hi] with 0 <= lo < 0.5 < hi <= 1 (the fit starts at 0.5)"),
         ]

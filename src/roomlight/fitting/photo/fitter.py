@@ -26,6 +26,7 @@ import torch
 
 from roomlight.errors import RoomlightError
 from roomlight.fitting.inverse.fitter import FitResult, Fitter, mask_window
+from roomlight.fitting.inverse.objective import image_loss
 from roomlight.fitting.inverse.lights import DirectLight, LightModel, PriorLight
 from roomlight.fitting.methods import PHOTO, methods_for
 from roomlight.fitting.methods import method as method_record
@@ -55,13 +56,16 @@ class PhotoModel(LightModel):
             0 leaves it out.
         albedo_prior_mean: the typical mean albedo that prior is centred on.
         albedo_prior_average: the mean over R, G, B it holds, ``geometric`` or ``arithmetic``.
+        receivers: the shadow receivers' materials (:mod:`roomlight.fitting.photo.receivers`), or None.
     """
 
     def __init__(self, light: LightModel, materials: ObjectMaterials, albedo_prior: float = 0.0,
-                 albedo_prior_mean: float = 0.3, albedo_prior_average: str = "arithmetic"):
+                 albedo_prior_mean: float = 0.3, albedo_prior_average: str = "arithmetic",
+                 receivers: ObjectMaterials | None = None):
         super().__init__()
         self.light_model = light
         self.materials = materials
+        self.receivers = receivers
         self.kind = light.kind
         self.albedo_prior = float(albedo_prior)
         self.albedo_prior_mean = float(albedo_prior_mean)
@@ -88,11 +92,17 @@ class PhotoModel(LightModel):
 
     def describe(self):
         v = self.materials.values().detach()
-        return {**self.light_model.describe(), "mean_albedo": float(v[:, :3].mean()),
-                "mean_roughness": float(v[:, 3].mean()), "mean_metallic": float(v[:, 4].mean())}
+        out = {**self.light_model.describe(), "mean_albedo": float(v[:, :3].mean()),
+               "mean_roughness": float(v[:, 3].mean()), "mean_metallic": float(v[:, 4].mean())}
+        if self.receivers is not None:
+            out["mean_receiver_albedo"] = float(self.receivers.values().detach()[:, :3].mean())
+        return out
 
     def scene_values(self):
-        return self.materials.scene_values()
+        values = self.materials.scene_values()
+        if self.receivers is not None:
+            values.update(self.receivers.scene_values())
+        return values
 
 
 class PhotoFitter(Fitter):
@@ -100,14 +110,24 @@ class PhotoFitter(Fitter):
 
     Args (beyond :class:`Fitter`'s):
         frustum: the frustum observations in the room frame, or None.
+        room: the visible room's points of the albedo bound, or None.
+        receiver_mask: (H, W) bool pixels of the shadow receivers' image term (the whole frame, as
+            ``mask``), or None.
     """
 
     def __init__(self, model: PhotoModel, escene, target, mask, points, config: PhotoFitConfig,
                  sensor_dict=None, window=None, frustum: FrustumTarget | None = None,
-                 room: RoomSurface | None = None):
+                 room: RoomSurface | None = None, receiver_mask: torch.Tensor | None = None):
         self.frustum = frustum if frustum is not None and len(frustum) else None
         self.room = room if room is not None and len(room) and config.room_albedo > 0 else None
         super().__init__(model, escene, target, mask, points, config, sensor_dict=sensor_dict, window=window)
+        self.receiver_mask = None
+        if receiver_mask is not None and bool(receiver_mask.any()) and config.lambda_receivers > 0:
+            m = receiver_mask.bool()
+            if window is not None:
+                x0, y0, w, h = window
+                m = m[y0:y0 + h, x0:x0 + w]
+            self.receiver_mask = m
 
     def fits_without_pixels(self) -> bool:
         # A photo without objects: the light is fitted to the visible room alone (frustum, room bound).
@@ -116,6 +136,12 @@ class PhotoFitter(Fitter):
     def terms(self, image, radiance, depth, mask):
         t = super().terms(image, radiance, depth, mask)
         c = self.config
+        if self.receiver_mask is not None and image is not None:
+            # The receivers' pixels under the same censored loss as the objects' (their shadows say how
+            # much light came through the directions the objects hide; receivers.py).
+            t["receivers"] = image_loss(image, self.target, self.receiver_mask, c.tau, c.c_max, c.lambda_log,
+                                        c.log_eps)["img"]
+            t["total"] = t["total"] + c.lambda_receivers * t["receivers"]
         if self.frustum is not None and (c.lambda_frustum > 0 or (depth is not None and c.lambda_frustum_depth > 0)):
             f = frustum_terms(radiance, depth, self.frustum, c.tau, c.c_max, c.lambda_log, c.log_eps)
             t.update(f)
@@ -246,9 +272,9 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
     return light, base, {"initial_radiance": float(level)}
 
 
-def _state_tag(method: str, case, light: LightModel) -> dict:
-    """What a saved fit state must have been made for: the method, its light, and the photograph
-    (a digest of the image, depth and labels), so a state is never resumed for another fit."""
+def _state_tag(method: str, case, light: LightModel, receivers: ObjectMaterials | None = None) -> dict:
+    """What a saved fit state must have been made for: the method, its light, the photograph (a digest of
+    the image, depth and labels) and the shadow receivers, so a state is never resumed for another fit."""
     import hashlib
 
     h = hashlib.sha256()
@@ -256,7 +282,8 @@ def _state_tag(method: str, case, light: LightModel) -> dict:
         h.update(np.ascontiguousarray(a).tobytes())
     return {"method": method, "light": type(light).__name__, "kind": str(light.kind), "photo": h.hexdigest()[:16],
             "depth_kind": case.depth_kind, "intrinsics": case.intrinsics.intrinsics_dict(),
-            "pitch_roll": [case.pitch_deg, case.roll_deg]}
+            "pitch_roll": [case.pitch_deg, case.roll_deg],
+            **({"receivers": list(receivers.labels)} if receivers is not None else {})}
 
 
 def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None, model=None, out_dir=None,
@@ -307,19 +334,32 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     # light and the albedos; under a light held fixed there is nothing to split: the prior would only bias
     # the albedos, the bound would be a constant.
     light_is_free = any(p.requires_grad for p in light.parameters())
+    # Shadow receivers say how bright the light is that the objects hide; under a light held fixed they
+    # would only fit their own albedos.
+    receivers = None
+    shapes = object_shapes(geometry.objects, transform)
+    if geometry.receivers and light_is_free:
+        receivers = ObjectMaterials([m.label for m in geometry.receivers], free=("albedo",), kind="receiver")
+        for label in receivers.labels:
+            receivers.set_values(label, roughness=1.0, metallic=0.0)
+        shapes.update(object_shapes(geometry.receivers, transform,
+                                    {lab: receivers.bsdf(lab) for lab in receivers.labels}, kind="receiver"))
     photo_model = PhotoModel(light, materials, config.albedo_prior if light_is_free else 0.0,
-                             config.albedo_prior_mean, config.albedo_prior_average)
+                             config.albedo_prior_mean, config.albedo_prior_average, receivers=receivers)
     sensor = photo_sensor(geometry.intrinsics, transform)
-    escene = EmitterScene(light.kind, light.resolution, objects=object_shapes(geometry.objects, transform),
+    escene = EmitterScene(light.kind, light.resolution, objects=shapes,
                           sensor=sensor, integrator={"type": "prb", "max_depth": int(config.max_depth)})
     points = torch.from_numpy(transform.points(np.concatenate([geometry.object_points, geometry.free_points]))).float()
     frustum = FrustumTarget(transform.points(geometry.frustum.points), transform.directions(geometry.frustum.rays),
                             geometry.frustum.radiance)
     target = torch.from_numpy(geometry.target)
     mask = torch.from_numpy(geometry.loss_mask)
-    window = mask_window(mask) if config.crop_to_mask else None
+    receiver_mask = torch.from_numpy(geometry.receiver_mask) if receivers is not None else None
+    seen = mask if receiver_mask is None else mask | receiver_mask
+    window = mask_window(seen) if config.crop_to_mask else None
     fitter = PhotoFitter(photo_model, escene, target, mask, points, config, sensor_dict=sensor, window=window,
-                         frustum=frustum, room=_room_surface(geometry, transform, config) if light_is_free else None)
+                         frustum=frustum, room=_room_surface(geometry, transform, config) if light_is_free else None,
+                         receiver_mask=receiver_mask)
 
     out = Path(out_dir) if out_dir is not None else None
     state = None
@@ -330,7 +370,8 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
             state.unlink()
     t0 = time.perf_counter()
     result = fitter.run(progress=progress, history_path=out / "history.jsonl" if out else None, state_path=state,
-                        checkpoint_every=config.checkpoint_every, state_tag=_state_tag(method, case, light))
+                        checkpoint_every=config.checkpoint_every,
+                        state_tag=_state_tag(method, case, light, receivers))
     result.method = method
     timings["fit"] = time.perf_counter() - t0
     t0 = time.perf_counter()

@@ -25,9 +25,10 @@ __all__ = ["ObjectMaterials", "object_id", "principled_bsdf", "PARTS"]
 PARTS = ("albedo", "roughness", "metallic")
 
 
-def object_id(label: int) -> str:
-    """The Mitsuba shape id of the object with mask label ``label``."""
-    return f"object_{int(label)}"
+def object_id(label: int, kind: str = "object") -> str:
+    """The Mitsuba shape id of the object with mask label ``label`` (``kind`` ``receiver``: of its shadow
+    receiver, :mod:`roomlight.fitting.photo.receivers`)."""
+    return f"{kind}_{int(label)}"
 
 
 class ObjectMaterials(torch.nn.Module):
@@ -37,11 +38,15 @@ class ObjectMaterials(torch.nn.Module):
         labels: the objects' mask labels, in order.
         logits: (n, 5) parameters: albedo R, G, B, roughness, metallic (before the sigmoid).
         free: the parts that are fitted (:data:`PARTS`); the others keep the values they are given.
+        kind: whose materials: the objects' (``object``) or their shadow receivers' (``receiver``); it
+            names the Mitsuba shapes (:func:`object_id`).
     """
 
-    def __init__(self, labels: list[int], init: float = 0.5, free=PARTS, albedo_range=(0.0, 1.0)):
+    def __init__(self, labels: list[int], init: float = 0.5, free=PARTS, albedo_range=(0.0, 1.0),
+                 kind: str = "object"):
         super().__init__()
         self.labels = [int(lab) for lab in labels]
+        self.kind = str(kind)
         lo, hi = (float(a) for a in albedo_range)
         if not 0.0 <= lo < init < hi <= 1.0:
             raise RoomlightError(f"materials: albedo_range must hold the start {init} inside [0, 1], got {albedo_range}")
@@ -122,7 +127,7 @@ class ObjectMaterials(torch.nn.Module):
         v = self.values()
         out: dict[str, torch.Tensor] = {}
         for k, label in enumerate(self.labels):
-            oid = object_id(label)
+            oid = object_id(label, self.kind)
             out[f"{oid}.bsdf.base_color.value"] = v[k, :3]
             out[f"{oid}.bsdf.roughness.value"] = v[k, 3:4]
             out[f"{oid}.bsdf.metallic.value"] = v[k, 4:5]
@@ -151,6 +156,6 @@ class ObjectMaterials(torch.nn.Module):
     def to_json(self) -> list[dict]:
         """One entry per object: label, Mitsuba id, albedo, roughness, metallic."""
         v = self.values().detach().tolist()
-        return [{"label": label, "id": object_id(label), "albedo": [round(x, 6) for x in v[k][:3]],
+        return [{"label": label, "id": object_id(label, self.kind), "albedo": [round(x, 6) for x in v[k][:3]],
                  "roughness": round(v[k][3], 6), "metallic": round(v[k][4], 6)}
                 for k, label in enumerate(self.labels)]

@@ -82,6 +82,15 @@ def _write_objects(path: Path, fit) -> None:
     write_ply(path, np.concatenate(verts), np.concatenate(faces), vertex_colors=np.concatenate(colours))
 
 
+def _receivers_json(fit) -> list[dict]:
+    """The shadow receivers' fitted materials and how many pixels each was fitted on."""
+    g = fit.geometry
+    out = fit.model.receivers.to_json()
+    for m in out:
+        m["fitted_pixels"] = int(((g.receiver_labels == m["label"]) & g.receiver_mask).sum())
+    return out
+
+
 def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[str, Path]:
     """Write one fit's files (module docstring) into ``out``; returns them by role."""
     from roomlight.core.emitter.export import export_emitter
@@ -144,6 +153,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "light_parameters": fit.model.light_model.describe(),
         "materials": materials,
         "objects": objects,
+        **({"receivers": _receivers_json(fit)} if fit.model.receivers is not None else {}),
         "camera": {"intrinsics_input": case.intrinsics.intrinsics_dict(), "input_size": [case.height, case.width],
                    "render_size": [g.intrinsics.height, g.intrinsics.width],
                    "intrinsics_render": g.intrinsics.intrinsics_dict(),

@@ -12,18 +12,20 @@ from roomlight.core.render.mesh import mitsuba_mesh
 __all__ = ["object_shape", "object_shapes", "photo_sensor"]
 
 
-def object_shape(obj: ObjectMesh, transform: SceneTransform, bsdf: dict | None = None):
-    """A ``mi.Mesh`` (id ``object_<label>``) of one object in the room frame, with its shading
-    normals and a BSDF (default: the principled material at 0.5 everywhere)."""
+def object_shape(obj: ObjectMesh, transform: SceneTransform, bsdf: dict | None = None, kind: str = "object"):
+    """A ``mi.Mesh`` (id ``<kind>_<label>``) of one object (or shadow receiver) in the room frame, with its
+    shading normals and a BSDF (default: the principled material at 0.5 everywhere)."""
     v = transform.points(obj.vertices)
     n = transform.directions(obj.normals)
-    return mitsuba_mesh(object_id(obj.label), v, obj.faces, bsdf or principled_bsdf([0.5] * 3, 0.5, 0.5), normals=n)
+    return mitsuba_mesh(object_id(obj.label, kind), v, obj.faces, bsdf or principled_bsdf([0.5] * 3, 0.5, 0.5),
+                        normals=n)
 
 
-def object_shapes(objects: list[ObjectMesh], transform: SceneTransform, bsdfs: dict[int, dict] | None = None) -> dict:
-    """Every object's mesh by id (to pass as ``EmitterScene(objects=...)``)."""
+def object_shapes(objects: list[ObjectMesh], transform: SceneTransform, bsdfs: dict[int, dict] | None = None,
+                  kind: str = "object") -> dict:
+    """Every object's (or receiver's) mesh by id (to pass as ``EmitterScene(objects=...)``)."""
     bsdfs = bsdfs or {}
-    return {object_id(o.label): object_shape(o, transform, bsdfs.get(o.label)) for o in objects}
+    return {object_id(o.label, kind): object_shape(o, transform, bsdfs.get(o.label), kind) for o in objects}
 
 
 def photo_sensor(intrinsics: PhotoCamera, transform: SceneTransform) -> dict:
