@@ -129,11 +129,14 @@ def floor_case(tmp_path_factory):
 def test_receiver_meshes_lie_on_the_floor_around_their_objects(floor_case):
     from roomlight.fitting.photo.config import photo_config
     from roomlight.fitting.photo.geometry import build_geometry, level_transform
+    from roomlight.fitting.photo.receivers import shadow_receivers
 
-    g = build_geometry(floor_case, photo_config("fast", shadow_receivers=True))
-    assert [m.label for m in g.receivers] == [1, 2]
+    cfg = photo_config("fast", shadow_receivers=True)
+    g = build_geometry(floor_case, cfg)
+    r = shadow_receivers(g, floor_case, cfg)
+    assert [m.label for m in r.meshes] == [1, 2]
     room = level_transform(floor_case)
-    for m in g.receivers:
+    for m in r.meshes:
         p = room.points(m.vertices)
         assert np.abs(p[:, 1] + 1.2).max() < 1e-6            # on the floor plane
         n = room.directions(m.normals)
@@ -142,11 +145,8 @@ def test_receiver_meshes_lie_on_the_floor_around_their_objects(floor_case):
         centre = obj.mean(0)
         horizontal = np.linalg.norm((p - centre)[:, [0, 2]], axis=1)
         assert horizontal.min() < 0.5 and horizontal.max() < 2.0   # around its own sphere
-    assert not (g.receiver_mask & (g.labels != 0)).any()
-    assert g.receiver_mask.any()
-    # without asking, nothing changes
-    plain = build_geometry(floor_case, photo_config("fast"))
-    assert plain.receivers == [] and plain.receiver_mask is None
+    assert not (r.mask & (g.labels != 0)).any()
+    assert r.mask.any()
 
 
 def test_the_receivers_term_is_the_censored_image_loss_on_their_pixels(floor_case, tmp_path, one_torch_thread):
@@ -184,5 +184,9 @@ def test_the_receivers_term_is_the_censored_image_loss_on_their_pixels(floor_cas
     result = json.loads(paths["result"].read_text())
     rec = result["receivers"]
     assert [r["label"] for r in rec] == [1, 2]
-    assert sum(r["fitted_pixels"] for r in rec) == int(fit.geometry.receiver_mask.sum())
+    assert sum(r["fitted_pixels"] for r in rec) == int(fit.receivers.mask.sum())
     assert all(r["metallic"] < 1e-3 and r["roughness"] > 0.999 for r in rec)   # held: a diffuse floor
+    # without asking, nothing changes: no receivers, no term
+    plain = fit_photo(floor_case, "direct-envmap", cfg.override(shadow_receivers=False),
+                      light=DirectLight("envmap", (8, 16), init_radiance=0.4), progress=False)
+    assert plain.receivers is None and plain.model.receivers is None and "receivers" not in plain.objective

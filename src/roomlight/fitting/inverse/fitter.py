@@ -141,15 +141,20 @@ class Fitter:
         else:
             if sensor_dict is None:
                 raise RoomlightError("Fitter: a rendering window needs the view's sensor dict")
-            x0, y0, w, h = window
             self.sensor = escene.cropped_sensor(sensor_dict, window)
-            self.target = self.full_target[y0:y0 + h, x0:x0 + w]
-            self.mask = self.full_mask[y0:y0 + h, x0:x0 + w]
+            self.target, self.mask = self.in_window(self.full_target), self.in_window(self.full_mask)
         self.points = points if (points is not None and light.has_depth and config.lambda_rep > 0) else None
         params = [p for p in light.parameters() if p.requires_grad]
         self.params = params
         self.optimizer = torch.optim.Adam(params, lr=config.lr, betas=tuple(config.betas))
         self.generator = torch.Generator().manual_seed(config.seed)
+
+    def in_window(self, image: torch.Tensor) -> torch.Tensor:
+        """The part of a whole-frame (H, W, ...) image inside the rendering window (all of it without one)."""
+        if self.window is None:
+            return image
+        x0, y0, w, h = self.window
+        return image[y0:y0 + h, x0:x0 + w]
 
     def fits_without_pixels(self) -> bool:
         """Whether the objective has terms beyond the image's (so an empty mask still fits something)."""

@@ -34,6 +34,7 @@ from roomlight.fitting.photo.config import PhotoFitConfig
 from roomlight.fitting.photo.frustum import FrustumTarget, frustum_terms
 from roomlight.fitting.photo.geometry import PhotoGeometry, SceneTransform, build_geometry, level_transform
 from roomlight.fitting.photo.materials import ObjectMaterials
+from roomlight.fitting.photo.receivers import ShadowReceivers, shadow_receivers
 from roomlight.fitting.photo.room_albedo import RoomSurface, room_albedo_term
 
 __all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
@@ -123,11 +124,7 @@ class PhotoFitter(Fitter):
         super().__init__(model, escene, target, mask, points, config, sensor_dict=sensor_dict, window=window)
         self.receiver_mask = None
         if receiver_mask is not None and bool(receiver_mask.any()) and config.lambda_receivers > 0:
-            m = receiver_mask.bool()
-            if window is not None:
-                x0, y0, w, h = window
-                m = m[y0:y0 + h, x0:x0 + w]
-            self.receiver_mask = m
+            self.receiver_mask = self.in_window(receiver_mask.bool())
 
     def fits_without_pixels(self) -> bool:
         # A photo without objects: the light is fitted to the visible room alone (frustum, room bound).
@@ -196,6 +193,7 @@ class PhotoFit:
         initial: how the fit started (latent draws, exposure, placement).
         containment: for a 2.5D light, how many free-space and object points it had to enclose,
             whether the depth floor held them, and the share of each left outside (0 with the floor).
+        receivers: the shadow receivers' geometry (:mod:`roomlight.fitting.photo.receivers`), or None.
     """
 
     method: str
@@ -208,6 +206,7 @@ class PhotoFit:
     timings: dict = field(default_factory=dict)
     initial: dict = field(default_factory=dict)
     containment: dict = field(default_factory=dict)
+    receivers: ShadowReceivers | None = None
 
     @property
     def materials(self) -> ObjectMaterials:
@@ -336,13 +335,15 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     light_is_free = any(p.requires_grad for p in light.parameters())
     # Shadow receivers say how bright the light is that the objects hide; under a light held fixed they
     # would only fit their own albedos.
-    receivers = None
+    receivers = shadow = None
     shapes = object_shapes(geometry.objects, transform)
-    if geometry.receivers and light_is_free:
-        receivers = ObjectMaterials([m.label for m in geometry.receivers], free=("albedo",), kind="receiver")
+    if config.shadow_receivers and light_is_free:
+        shadow = shadow_receivers(geometry, case, config)
+    if shadow is not None:
+        receivers = ObjectMaterials([m.label for m in shadow.meshes], free=("albedo",), kind="receiver")
         for label in receivers.labels:
             receivers.set_values(label, roughness=1.0, metallic=0.0)
-        shapes.update(object_shapes(geometry.receivers, transform,
+        shapes.update(object_shapes(shadow.meshes, transform,
                                     {lab: receivers.bsdf(lab) for lab in receivers.labels}, kind="receiver"))
     photo_model = PhotoModel(light, materials, config.albedo_prior if light_is_free else 0.0,
                              config.albedo_prior_mean, config.albedo_prior_average, receivers=receivers)
@@ -354,7 +355,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
                             geometry.frustum.radiance)
     target = torch.from_numpy(geometry.target)
     mask = torch.from_numpy(geometry.loss_mask)
-    receiver_mask = torch.from_numpy(geometry.receiver_mask) if receivers is not None else None
+    receiver_mask = torch.from_numpy(shadow.mask) if shadow is not None else None
     seen = mask if receiver_mask is None else mask | receiver_mask
     window = mask_window(seen) if config.crop_to_mask else None
     fitter = PhotoFitter(photo_model, escene, target, mask, points, config, sensor_dict=sensor, window=window,
@@ -387,7 +388,8 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
             "objects_outside_share": outside_share(result.depth, torch.from_numpy(contained[1]))}
     else:
         containment = {}
-    return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info, containment)
+    return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info, containment,
+                    shadow)
 
 
 def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig) -> RoomSurface | None:

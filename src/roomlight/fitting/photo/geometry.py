@@ -12,7 +12,7 @@ Neither is ever larger than the photograph.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -121,11 +121,6 @@ class PhotoGeometry:
         free_points: (M, 3) points of the empty space between the camera and what it sees.
         object_points: (K, 3) points on the objects' surfaces.
         pixel_points: (Hr * Wr, 3) the point every render pixel sees (objects and room).
-        receivers: the shadow receivers' meshes, one per object that has one, each labelled with its
-            object's label (:mod:`roomlight.fitting.photo.receivers`); empty unless asked for.
-        receiver_labels: (Hr, Wr) int32 the receiver each pixel belongs to (its object's label), 0 elsewhere.
-        receiver_mask: (Hr, Wr) bool receiver pixels the receivers' image term sees (all eight neighbours in
-            the same receiver, as for the objects).
     """
 
     intrinsics: PhotoCamera
@@ -138,9 +133,6 @@ class PhotoGeometry:
     free_points: np.ndarray
     object_points: np.ndarray
     pixel_points: np.ndarray | None = None
-    receivers: list[ObjectMesh] = field(default_factory=list)
-    receiver_labels: np.ndarray | None = None
-    receiver_mask: np.ndarray | None = None
 
     @property
     def labels_present(self) -> list[int]:
@@ -234,9 +226,6 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
     normals_r, normal_ok = surface_normals(pts_r, config.edge_tolerance)
     frustum = FrustumSamples(pts_r.reshape(-1, 3)[idx], rays_r.reshape(-1, 3)[idx], target.reshape(-1, 3)[idx],
                              normals_r.reshape(-1, 3)[idx], normal_ok.reshape(-1)[idx])
-    receivers, rec_labels, rec_mask = [], None, None
-    if getattr(config, "shadow_receivers", False) and objects:
-        receivers, rec_labels, rec_mask = _receivers(case, config, labels_r, pts_r, normals_r, mesh, gh, gw, normals_g)
 
     # --- repulsion points: the objects' surfaces and the empty space in front of everything
     per = config.repulsion_points
@@ -251,29 +240,7 @@ def build_geometry(case, config, seed: int | None = None) -> PhotoGeometry:
     free = pts_r.reshape(-1, 3)[pix] * t[:, None]
     obj_pts = np.concatenate(obj_pts) if obj_pts else np.zeros((0, 3), np.float32)
     return PhotoGeometry(k_ren, target, labels_r, loss_mask, mesh, objects, frustum, free, obj_pts,
-                         pts_r.reshape(-1, 3), receivers, rec_labels, rec_mask)
-
-
-def _receivers(case, config, labels_r, pts_r, normals_r, mesh, gh, gw, normals_g):
-    """The shadow receivers (:mod:`roomlight.fitting.photo.receivers`): their meshes (cut from the depth
-    mesh at the geometry resolution), their labels and the pixels their image term sees (render resolution).
-    A receiver too small to keep a triangle or an interior pixel is left out."""
-    from roomlight.fitting.photo.receivers import locally_flat, receiver_labels
-
-    up = camera_rotation(case.pitch_deg, case.roll_deg).T @ np.array([0.0, 1.0, 0.0])
-    flat = locally_flat(pts_r)
-    rec = receiver_labels(labels_r, normals_r, flat, up, config.receiver_radius, config.receiver_min_up)
-    inner = _interior(rec)
-    rec_g = resize_nearest(rec, gh, gw)
-    meshes = []
-    for label in sorted(int(v) for v in np.unique(rec[inner])):
-        try:
-            meshes.append(object_mesh(mesh, rec_g, label, normals_g))
-        except RoomlightError:
-            continue
-    kept = [m.label for m in meshes]
-    rec = np.where(np.isin(rec, kept), rec, 0).astype(np.int32)
-    return meshes, rec, inner & (rec != 0)
+                         pts_r.reshape(-1, 3))
 
 
 

@@ -84,10 +84,10 @@ def _write_objects(path: Path, fit) -> None:
 
 def _receivers_json(fit) -> list[dict]:
     """The shadow receivers' fitted materials and how many pixels each was fitted on."""
-    g = fit.geometry
+    r = fit.receivers
     out = fit.model.receivers.to_json()
     for m in out:
-        m["fitted_pixels"] = int(((g.receiver_labels == m["label"]) & g.receiver_mask).sum())
+        m["fitted_pixels"] = int(((r.labels == m["label"]) & r.mask).sum())
     return out
 
 

@@ -25,9 +25,14 @@ pattern then reads as light, as an object's texture does.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["receiver_labels", "locally_flat"]
+from roomlight.errors import RoomlightError
+from roomlight.fitting.photo.unproject import ObjectMesh
+
+__all__ = ["ShadowReceivers", "shadow_receivers", "receiver_labels", "locally_flat"]
 
 #: Background pixels this close to an object (8-connected steps) may be crossed, not taken: the depth edge
 #: of the object's silhouette leaves them without a reliable normal.
@@ -122,3 +127,53 @@ def receiver_labels(labels: np.ndarray, normals: np.ndarray, normal_ok: np.ndarr
             break
         owner = grown
     return np.where(candidate, owner, 0).astype(np.int32)
+
+
+@dataclass
+class ShadowReceivers:
+    """The shadow receivers of a photo fit.
+
+    Attributes:
+        meshes: one per object that has a receiver, cut from the depth mesh and labelled with its object's label.
+        labels: (Hr, Wr) int32 the receiver each render pixel belongs to (its object's label), 0 elsewhere.
+        mask: (Hr, Wr) bool the receiver pixels the receivers' image term sees (all eight neighbours in the
+            same receiver, as for the objects).
+    """
+
+    meshes: list[ObjectMesh]
+    labels: np.ndarray
+    mask: np.ndarray
+
+
+def shadow_receivers(geometry, case, config) -> ShadowReceivers | None:
+    """The receivers of a photograph prepared for fitting (:class:`~roomlight.fitting.photo.geometry.PhotoGeometry`
+    of ``case`` under ``config``), or None when no object has one. A receiver too small to keep a triangle of
+    the depth mesh or an interior pixel is left out."""
+    from roomlight.fitting.photo.camera import camera_rotation
+    from roomlight.fitting.photo.geometry import _interior
+    from roomlight.fitting.photo.masks import resize_nearest
+    from roomlight.fitting.photo.room_albedo import surface_normals
+    from roomlight.fitting.photo.unproject import object_mesh
+
+    if not geometry.objects:
+        return None
+    rh, rw = geometry.labels.shape
+    points = geometry.pixel_points.reshape(rh, rw, 3)
+    normals, _ = surface_normals(points, config.edge_tolerance)
+    up = camera_rotation(case.pitch_deg, case.roll_deg).T @ np.array([0.0, 1.0, 0.0])
+    rec = receiver_labels(geometry.labels, normals, locally_flat(points), up, config.receiver_radius,
+                          config.receiver_min_up)
+    inner = _interior(rec)
+    gh, gw = geometry.mesh.shape
+    rec_g = resize_nearest(rec, gh, gw)
+    normals_g = resize_nearest(case.normals, gh, gw) if case.normals is not None else None
+    meshes = []
+    for label in sorted(int(v) for v in np.unique(rec[inner])):
+        try:
+            meshes.append(object_mesh(geometry.mesh, rec_g, label, normals_g))
+        except RoomlightError:
+            continue
+    if not meshes:
+        return None
+    rec = np.where(np.isin(rec, [m.label for m in meshes]), rec, 0).astype(np.int32)
+    return ShadowReceivers(meshes, rec, inner & (rec != 0))
