@@ -99,6 +99,20 @@ def test_joint_fit_of_light_and_materials(photo, prior, tmp_path, one_torch_thre
     assert max(steps) <= cfg.latent_step_clip + 1e-6 and min(steps) > 0.5 * cfg.latent_step_clip, steps
 
 
+def test_a_photo_fit_anchors_at_its_own_start(photo, prior):
+    """The anchor is the start the fit was given (z0 of the start), so the term is 0 before any step."""
+    from roomlight.fitting.photo.fitter import _initial_light
+    from roomlight.fitting.photo.geometry import build_geometry
+
+    _, case, _ = photo
+    cfg = _config(z_anchor=0.01, frustum_points=32, repulsion_points=32, init="samples")
+    geometry = build_geometry(case, cfg)
+    light, _, info = _initial_light("prior", geometry, cfg, prior, case)
+    torch.testing.assert_close(light.z_start, light.z.detach())
+    assert float(light.z_start.norm()) == pytest.approx(info["z_norm"], rel=1e-5) and info["z_norm"] > 0
+    assert float(light.regularizers()["z_anchor"]) == 0.0
+
+
 @pytest.mark.slow
 def test_interrupted_fit_resumes_where_it_stopped(photo, prior, tmp_path, monkeypatch, one_torch_thread):
     """A fit interrupted after its fourth iteration and run again continues from the saved state

@@ -66,6 +66,8 @@ class PriorLight(LightModel):
         envmap: show the radiance at infinity (``prior-envmap``) instead of as the 2.5D light.
         init_exposure: e^s at the start.
         z_prior: weight of 0.5 |z|^2.
+        z_anchor: weight of 0.5 |z - z_start|^2, a pull towards where the fit started (see
+            :meth:`anchor_here`); 0 = off.
         fit_depth_scale: also fit a global log scale of the decoded depth.
         white_balance: weight w of the pull to neutral of a white balance c in R^3 fitted beside
             the exposure, or None for the paper's scalar exposure. The radiance is multiplied by
@@ -75,7 +77,7 @@ class PriorLight(LightModel):
     """
 
     def __init__(self, model, envmap: bool = False, init_exposure: float = 0.18, z_prior: float = 0.0,
-                 fit_depth_scale: bool = False, white_balance: float | None = None):
+                 fit_depth_scale: bool = False, white_balance: float | None = None, z_anchor: float = 0.0):
         super().__init__()
         self.model = model.eval()
         for p in self.model.parameters():
@@ -91,6 +93,13 @@ class PriorLight(LightModel):
         self.c = torch.nn.Parameter(torch.zeros(3)) if white_balance is not None else None
         self.white_balance = white_balance
         self.z_prior = z_prior
+        if not z_anchor >= 0:
+            raise ValueError(f"z_anchor weight must be >= 0, got {z_anchor}")
+        self.z_anchor = z_anchor
+        #: (latent,) where the anchor term pulls z; zeros until :meth:`anchor_here`. A buffer, so it
+        #: follows the light to its device; a resumed fit sets it again from the same start.
+        self.register_buffer("z_start", torch.zeros(latent))
+        self._anchored = False
         #: (H, W) floor under the decoded depth (:mod:`roomlight.fitting.inverse.floor`), or None. A plain
         #: attribute, not a buffer: it belongs to the fit's scene, not to the light's state.
         self.depth_floor: torch.Tensor | None = None
@@ -118,10 +127,18 @@ class PriorLight(LightModel):
             d = d * torch.exp(self.log_depth_scale)
         return rad, apply_floor(d, self.depth_floor)
 
+    def anchor_here(self) -> None:
+        """Make the current z the point the anchor term pulls towards (call after setting the start)."""
+        with torch.no_grad():
+            self.z_start.copy_(self.z)
+        self._anchored = True
+
     def regularizers(self):
         terms = {}
         if self.z_prior > 0:
             terms["z_prior"] = self.z_prior * 0.5 * self.z.square().sum()
+        if self.z_anchor > 0:
+            terms["z_anchor"] = self.z_anchor * 0.5 * (self.z - self.z_start).square().sum()
         c = self.log_white_balance()
         if c is not None and self.white_balance > 0:
             terms["white_balance"] = self.white_balance * c.square().sum()
@@ -129,6 +146,9 @@ class PriorLight(LightModel):
 
     def describe(self):
         d = {"exposure": float(torch.exp(self.s.detach())), "z_norm": float(self.z.detach().norm())}
+        if self._anchored:
+            # How far the fit moved the room from its start: what the anchor term holds back.
+            d["z_travel"] = float((self.z.detach() - self.z_start).norm())
         c = self.log_white_balance()
         if c is not None:
             d["white_balance"] = [round(float(v), 6) for v in torch.exp(c.detach())]

@@ -37,6 +37,7 @@ class PhotoFitConfig(FitConfig):
     grad_clip: float = 0.0                #: global gradient-norm clip; 0 = off (the latent step clip replaces it)
     latent_step_clip: float = 0.1         #: largest norm of one step of z (0 = off)
     z_prior: float = 1e-4                 #: weight w of the Gaussian prior w * 0.5 |z|^2
+    z_anchor: float = 0.0                 #: weight of a pull 0.5 |z - z_start|^2 towards the fit's start (0 = off)
     geometry_size: int = 1024             #: longest side (px) of the depth mesh
     render_size: int = 640                #: longest side (px) of the rendered and fitted image
     edge_tolerance: float = 0.05          #: relative depth jump that cuts a triangle of the depth mesh
@@ -87,6 +88,7 @@ class PhotoFitConfig(FitConfig):
             (self.init in ("auto", "view", "samples", "zero"), "init must be one of auto, view, samples, zero"),
             (self.placement_steps >= 0, "placement_steps must be >= 0"),
             (self.latent_step_clip >= 0 and self.grad_clip >= 0, "latent_step_clip and grad_clip must be >= 0"),
+            (self.z_anchor >= 0, "z_anchor must be >= 0"),
             (self.probe_count >= 0 and self.probe_resolution >= 8, "probe_count >= 0 and probe_resolution >= 8"),
             (0 < self.probe_size < 1, "probe_size must be in (0, 1)"),
             (self.albedo_prior >= 0, "albedo_prior must be >= 0"),

@@ -232,12 +232,14 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
         as_mesh = record.light == "mesh"
         z0, start = start_latent(config.init, model, case, config)
         light = PriorLight(model, envmap=not as_mesh, init_exposure=1.0, z_prior=config.z_prior,
-                           white_balance=config.white_balance_weight if config.white_balance else None)
+                           white_balance=config.white_balance_weight if config.white_balance else None,
+                           z_anchor=config.z_anchor)
         with torch.no_grad():
             light.z.copy_(z0.to(light.z.device))
             rad, depth = model.decode(z0[None].to(next(model.parameters()).device))
             rad = rad[0].permute(1, 2, 0).cpu()
             depth = None if depth is None else depth[0, 0].cpu()
+        light.anchor_here()
         if as_mesh and start["init"] == "view":
             # The view encoder decodes the room around the camera, in the photograph's metres: the
             # camera is its centre. (Placing the scene anew would let it shrink the photograph into
