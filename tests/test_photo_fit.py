@@ -113,6 +113,26 @@ def test_a_photo_fit_anchors_at_its_own_start(photo, prior):
     assert float(light.regularizers()["z_anchor"]) == 0.0
 
 
+def test_the_start_level_moves_by_the_asked_stops(photo, prior):
+    """start_exposure_ev = 1.5 starts every light 2^1.5 times as bright as the match to the background, the
+    prior's (same latent) and the free env map's alike; nothing else about the start changes."""
+    from roomlight.fitting.photo.fitter import _initial_light
+    from roomlight.fitting.photo.geometry import build_geometry
+
+    _, case, _ = photo
+    starts = {}
+    for ev in (0.0, 1.5):
+        cfg = _config(start_exposure_ev=ev, frustum_points=32, repulsion_points=32, init="samples")
+        geometry = build_geometry(case, cfg)
+        starts[ev] = {m: _initial_light(m, geometry, cfg, prior, case) for m in ("prior", "direct-envmap")}
+    (l0, _, i0), (l1, _, i1) = starts[0.0]["prior"], starts[1.5]["prior"]
+    assert i1["exposure"] / i0["exposure"] == pytest.approx(2 ** 1.5, rel=1e-6)
+    assert float(torch.exp(l1.s) / torch.exp(l0.s)) == pytest.approx(2 ** 1.5, rel=1e-5)
+    torch.testing.assert_close(l0.z, l1.z)
+    d0, d1 = starts[0.0]["direct-envmap"][2], starts[1.5]["direct-envmap"][2]
+    assert d1["initial_radiance"] / d0["initial_radiance"] == pytest.approx(2 ** 1.5, rel=1e-6)
+
+
 @pytest.mark.slow
 def test_interrupted_fit_resumes_where_it_stopped(photo, prior, tmp_path, monkeypatch, one_torch_thread):
     """A fit interrupted after its fourth iteration and run again continues from the saved state

@@ -51,6 +51,7 @@ class PhotoFitConfig(FitConfig):
     init: str = "auto"                    #: start of z: view (view encoder), samples (paper), zero; auto = view if the prior has one
     init_samples: int = 16                #: N(0, I) draws; the one with the largest room starts the fit
     placement_steps: int = 200            #: steps placing the camera and objects inside the initial room
+    start_exposure_ev: float = 0.0        #: stops added to the light's starting level (matched to the photo's background)
     checkpoint_every: int = 25            #: save the fit's state every this many iterations (0 = never)
     albedo_prior: float = 0.0             #: weight of the log-normal reflectance prior on the objects' mean albedo (0 = off)
     albedo_prior_mean: float = 0.3        #: the typical mean albedo over R, G, B that prior is centred on

@@ -253,6 +253,7 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
         else:  # at infinity nothing depends on where the scene is
             transform, dirs = base, obs_room_dirs
         s0 = matching_log_exposure(rad, dirs, geometry.frustum.radiance, config.tau)
+        s0 += config.start_exposure_ev * math.log(2.0)
         with torch.no_grad():
             light.s.fill_(s0)
         info = {**start, "z_norm": float(z0.norm()), "exposure": math.exp(s0)}
@@ -268,6 +269,7 @@ def _initial_light(method: str, geometry: PhotoGeometry, config: PhotoFitConfig,
     obs = geometry.frustum.radiance
     keep = obs.max(-1) < config.tau
     level = log_average_np(obs[keep]) if keep.any() else config.init_exposure
+    level *= 2.0 ** config.start_exposure_ev
     light = DirectLight(record.light, config.direct_resolution, init_radiance=float(level),
                         smooth_radiance=config.smooth_radiance, smooth_depth=config.smooth_depth)
     return light, base, {"initial_radiance": float(level)}
