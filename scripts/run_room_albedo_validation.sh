@@ -5,11 +5,8 @@
 # (The room1 runs let the bound move the whole light, room_albedo_moves=light; room1e its exposure only.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-R=.venv/bin/roomlight
-run() {  # run SUITE NAME SETTINGS...
-  local suite=$1 name=$2; shift 2
-  $R bench run-photos bench/$suite --out results/$suite-$name --preset fast --eval-spp 64 --methods prior --quiet "$@"
-}
+source scripts/validation_photos.sh
+run() { run_validation "$@"; }
 PAPER=(--set albedo_prior=0)
 run wide-val room1 "${PAPER[@]}" --set room_albedo=1 --set room_albedo_moves=light
 run photos-val8 paper "${PAPER[@]}"

@@ -6,15 +6,9 @@
 # Resumable: rerun to continue.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-R=.venv/bin/roomlight
-[ -d bench/wide-val ] || $R bench make-photos --suite wide --res 96x128 --spp 64 --probe-spp 256 --insert-spp 0 \
-    --quiet --out bench/wide-val --n 9 --seed 500200
-[ -d bench/photos-val8 ] || $R bench make-photos --out bench/photos-val8 --n 8 --seed 400200 --res 96x128 --spp 64 \
-    --probe-spp 256 --insert-spp 0 --quiet
-run() {  # run SUITE NAME SETTINGS...
-  local suite=$1 name=$2; shift 2
-  $R bench run-photos bench/$suite --out results/$suite-$name --preset fast --eval-spp 64 --methods prior --quiet "$@"
-}
+source scripts/validation_photos.sh
+build_validation_photos
+run() { run_validation "$@"; }
 for suite in wide-val photos-val8; do
   run $suite room1 --set albedo_prior=0 --set room_albedo=1 --set room_albedo_moves=light
   run $suite room1e --set albedo_prior=0 --set room_albedo=1 --set room_albedo_moves=exposure
