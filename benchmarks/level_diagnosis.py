@@ -43,43 +43,33 @@ ROOT = Path(__file__).resolve().parent.parent
 def fit_from_ceiling(case_dir, method, preset, out_dir, model=None, progress=False, overrides=None) -> dict:
     """The benchmark's fit function (see ``roomlight.evaluation.photobench.adapter.fit_photo_case``) with the
     prior's light started at its ceiling latent, in the oracle's frame."""
+    import time
+
     import torch
 
-    from roomlight.evaluation.photobench import case as fmt
-    from roomlight.evaluation.photobench.ceiling import CEILING_FIT
-    from roomlight.evaluation.photobench.scoring import load_truth, oracle_light
+    from roomlight.evaluation.photobench.adapter import finished_fit
+    from roomlight.evaluation.photobench.ceiling import prior_ceiling_latent
+    from roomlight.evaluation.photobench.scoring import load_truth
     from roomlight.fitting.inverse.lights import PriorLight
     from roomlight.fitting.photo import case as case_mod
     from roomlight.fitting.photo import config as config_mod
     from roomlight.fitting.photo import fitter as fitter_mod
-    from roomlight.fitting.photo import outputs as outputs_mod
     from roomlight.fitting.photo.geometry import SceneTransform
-    from roomlight.prior.data.dataset import load_training_pair
-    from roomlight.prior.latent_fit.latent import LatentFitConfig, fit_latent
 
     assert method == "prior", method
+    t0 = time.perf_counter()
     config = config_mod.photo_config(preset, **dict(overrides or {}))
     case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
-    oracle = oracle_light(case_dir, "mesh", load_truth(case_dir))
-    rad, dep, info = load_training_pair(Path(case_dir) / fmt.ORACLE, model.config.resolution, calibrate=True)
-    res = fit_latent(model, rad[None], dep[None], LatentFitConfig(**CEILING_FIT))
+    res, exposure_factor, frame = prior_ceiling_latent(case_dir, model, load_truth(case_dir))
     light = PriorLight(model, envmap=False, init_exposure=1.0, z_prior=config.z_prior, z_anchor=config.z_anchor)
     with torch.no_grad():
         light.z.copy_(res.z[0])
-        light.s.fill_(math.log(float(info["exposure_factor"])))
+        light.s.fill_(math.log(exposure_factor))
     light.anchor_here()
-    transform = SceneTransform.from_matrix(oracle.frame, "oracle frame")
-    out = Path(out_dir)
-    fit = fitter_mod.fit_photo(case, method, config, model=model, out_dir=out, progress=progress, light=light,
-                               transform=transform)
-    outputs_mod.write_fit_files(out, fit, case, config)
-    (out / fitter_mod.STATE_FILE).unlink(missing_ok=True)
-    radiance, depth = fit.result.light.to_numpy()
-    return {"radiance": radiance, "depth": depth, "emitter_kind": str(fit.fitter.escene.kind),
-            "light_from_camera": fit.transform.matrix,
-            "materials": {int(e["label"]): {"albedo": e["albedo"], "roughness": e["roughness"],
-                                            "metallic": e["metallic"]} for e in fit.materials.to_json()},
-            "seconds": float(fit.timings.get("fit", 0.0))}
+    transform = SceneTransform.from_matrix(frame, "oracle frame")
+    fit = fitter_mod.fit_photo(case, method, config, model=model, out_dir=Path(out_dir), progress=progress,
+                               light=light, transform=transform)
+    return finished_fit(fit, case, config, out_dir, t0)
 
 
 def brightness(results: Path, method: str) -> dict[str, float]:

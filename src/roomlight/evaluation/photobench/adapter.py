@@ -18,7 +18,7 @@ from roomlight.errors import RoomlightError
 from roomlight.fitting.methods import ESTIMATE_ROWS, PHOTO, methods_for
 from roomlight.fitting.methods import method as method_record
 
-__all__ = ["PHOTO_FIT_METHODS", "fit_photo_case"]
+__all__ = ["PHOTO_FIT_METHODS", "finished_fit", "fit_photo_case"]
 
 #: Every method name the benchmark can fit: those of ``roomlight fit-photo`` and the variants of ``prior``
 #: with a fixed start (``fit-photo --init``), the rows that split the photo fit's gap. (``prior`` itself
@@ -47,7 +47,6 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
     from roomlight.fitting.photo import case as case_mod
     from roomlight.fitting.photo import config as config_mod
     from roomlight.fitting.photo import fitter as fitter_mod
-    from roomlight.fitting.photo import outputs as outputs_mod
 
     if method not in PHOTO_FIT_METHODS:
         raise RoomlightError(f"unknown photo method {method!r}; choose one of {', '.join(PHOTO_FIT_METHODS)}")
@@ -60,6 +59,17 @@ def fit_photo_case(case_dir, method: str, preset: str, out_dir, model=None, prog
     case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
     out = Path(out_dir)
     fit = fitter_mod.fit_photo(case, method, config, model=model, out_dir=out, progress=progress)
+    return finished_fit(fit, case, config, out, t0)
+
+
+def finished_fit(fit, case, config, out_dir, t0: float) -> dict:
+    """Write a finished photo fit's files to ``out_dir``, drop its resumable state, and return the dict
+    :func:`fit_photo_case` returns (``t0``: when the fit began, for its time where it recorded none).
+    For a fit function of its own (``run_photo_benchmark(fit=...)``) that calls ``fit_photo`` itself."""
+    from roomlight.fitting.photo import fitter as fitter_mod
+    from roomlight.fitting.photo import outputs as outputs_mod
+
+    out = Path(out_dir)
     outputs_mod.write_fit_files(out, fit, case, config)
     (out / fitter_mod.STATE_FILE).unlink(missing_ok=True)  # finished: the outputs are the result
     radiance, depth = fit.result.light.to_numpy()

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from roomlight.evaluation.photobench import case as fmt
 
-__all__ = ["CEILING", "CEILING_FIT", "prior_ceiling_light"]
+__all__ = ["CEILING", "CEILING_FIT", "prior_ceiling_latent", "prior_ceiling_light"]
 
 #: The benchmark's name of this reference.
 CEILING = "prior-ceiling"
@@ -24,13 +24,18 @@ CEILING = "prior-ceiling"
 CEILING_FIT = {"steps": 1500, "init_from_encoder": True, "depth_weight": 3.0, "peak_weight": 0.03}
 
 
-def prior_ceiling_light(case_dir, model, truth=None):
-    """The prior's best approximation of the case's oracle panorama, as a 2.5D
-    :class:`~roomlight.core.light.Light` in the oracle's frame."""
+def prior_ceiling_latent(case_dir, model, truth=None):
+    """The prior's latent fitted to the case's oracle panorama.
+
+    Returns:
+        (result, exposure_factor, frame): the :class:`~roomlight.prior.latent_fit.latent.LatentFitResult`
+        of one panorama (``z`` (1, latent), ``radiance`` (1, 3, H, W) and ``depth`` (1, 1, H, W) decoded at
+        it, in the calibrated units the fit saw), the factor that brings that radiance back to the
+        oracle's units, and the oracle's (4, 4) light-from-camera frame the room stands in.
+    """
     from roomlight.prior.data.dataset import load_training_pair
     from roomlight.errors import RoomlightError
     from roomlight.prior.latent_fit.latent import LatentFitConfig, fit_latent
-    from roomlight.core.light import Light
     from roomlight.evaluation.photobench.scoring import oracle_light
 
     if model is None:
@@ -39,5 +44,14 @@ def prior_ceiling_light(case_dir, model, truth=None):
     rad, dep, info = load_training_pair(Path(case_dir) / fmt.ORACLE, model.config.resolution, calibrate=True)
     device = next(model.parameters()).device
     res = fit_latent(model, rad[None].to(device), dep[None].to(device), LatentFitConfig(**CEILING_FIT))
-    radiance = (res.radiance[0] * float(info["exposure_factor"])).permute(1, 2, 0)
-    return Light(radiance, res.depth[0, 0], "mesh", oracle.frame)
+    return res, float(info["exposure_factor"]), oracle.frame
+
+
+def prior_ceiling_light(case_dir, model, truth=None):
+    """The prior's best approximation of the case's oracle panorama, as a 2.5D
+    :class:`~roomlight.core.light.Light` in the oracle's frame."""
+    from roomlight.core.light import Light
+
+    res, exposure_factor, frame = prior_ceiling_latent(case_dir, model, truth)
+    radiance = (res.radiance[0] * exposure_factor).permute(1, 2, 0)
+    return Light(radiance, res.depth[0, 0], "mesh", frame)
