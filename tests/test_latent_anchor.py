@@ -8,22 +8,15 @@ from __future__ import annotations
 import pytest
 import torch
 
+from helpers_prior import tiny_prior
 from roomlight.errors import RoomlightError
 from roomlight.fitting.inverse.lights import PriorLight
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
-def tiny_model():
-    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
-
-    torch.manual_seed(0)
-    norm = Normalization(mean=torch.tensor([0.5, 0.5, 0.5, 1.0]), std=torch.tensor([0.5, 0.5, 0.5, 0.3]))
-    return PanoVAE(ModelConfig.preset("tiny"), normalization=norm)
-
-
 def test_anchor_value_and_gradient_against_finite_differences():
-    light = PriorLight(tiny_model(), z_anchor=0.3)
+    light = PriorLight(tiny_prior(), z_anchor=0.3)
     n = light.z.numel()
     g = torch.Generator().manual_seed(1)
     start = torch.randn(n, generator=g)
@@ -55,13 +48,13 @@ def test_anchor_value_and_gradient_against_finite_differences():
 
 
 def test_an_unanchored_light_records_no_travel():
-    assert "z_travel" not in PriorLight(tiny_model()).describe()
+    assert "z_travel" not in PriorLight(tiny_prior()).describe()
 
 
 def test_no_anchor_term_at_weight_zero_and_negative_weights_are_refused():
-    assert "z_anchor" not in PriorLight(tiny_model()).regularizers()
+    assert "z_anchor" not in PriorLight(tiny_prior()).regularizers()
     with pytest.raises(ValueError):
-        PriorLight(tiny_model(), z_anchor=-1.0)
+        PriorLight(tiny_prior(), z_anchor=-1.0)
     from roomlight.fitting.photo.config import photo_config
 
     with pytest.raises(RoomlightError, match="z_anchor"):

@@ -3,20 +3,12 @@
 from __future__ import annotations
 
 import pytest
-import torch
 
 from roomlight.errors import RoomlightError
 from roomlight.fitting.methods import FIT, PHOTO, METHODS, default_run, is_reference, method, methods_for, needs_prior
 
+from helpers_prior import tiny_prior
 from helpers_scene import make_tiny_scene
-
-
-def tiny_prior():
-    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
-
-    torch.manual_seed(0)
-    norm = Normalization(mean=torch.tensor([0.5, 0.5, 0.5, 1.0]), std=torch.tensor([0.5, 0.5, 0.5, 0.3]))
-    return PanoVAE(ModelConfig.preset("tiny"), normalization=norm)
 
 
 @pytest.mark.mitsuba

@@ -10,6 +10,7 @@ import math
 import pytest
 import torch
 
+from helpers_prior import tiny_prior
 from helpers_scene import make_tiny_scene
 from roomlight.fitting.inverse import FitConfig, fit_scene, make_light
 from roomlight.fitting.inverse.lights import PriorLight
@@ -17,16 +18,8 @@ from roomlight.fitting.inverse.lights import PriorLight
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
-def tiny_model():
-    from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
-
-    torch.manual_seed(0)
-    norm = Normalization(mean=torch.tensor([0.5, 0.5, 0.5, 1.0]), std=torch.tensor([0.5, 0.5, 0.5, 0.3]))
-    return PanoVAE(ModelConfig.preset("tiny"), normalization=norm)
-
-
 def test_the_gain_is_exp_of_s_plus_centred_c_and_the_pull_is_to_neutral():
-    light = PriorLight(tiny_model(), init_exposure=0.5, white_balance=2.0)
+    light = PriorLight(tiny_prior(), init_exposure=0.5, white_balance=2.0)
     with torch.no_grad():
         light.c.copy_(torch.tensor([0.3, 0.1, 0.2]))  # centred: [0.1, -0.1, 0.0]
     c = torch.tensor([0.1, -0.1, 0.0])
@@ -44,7 +37,7 @@ def test_the_gain_is_exp_of_s_plus_centred_c_and_the_pull_is_to_neutral():
 
 
 def test_the_gradient_reaches_c_as_finite_differences_say():
-    light = PriorLight(tiny_model(), white_balance=0.7)
+    light = PriorLight(tiny_prior(), white_balance=0.7)
     w = torch.rand(*light.resolution, 3, generator=torch.Generator().manual_seed(3))
 
     def objective():
