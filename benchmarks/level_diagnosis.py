@@ -72,13 +72,12 @@ def fit_from_ceiling(case_dir, method, preset, out_dir, model=None, progress=Fal
     return finished_fit(fit, case, config, out_dir, t0)
 
 
-def brightness(results: Path, method: str) -> dict[str, float]:
-    """Photo -> the light's level at the diffuse probes over the truth's (scripts/photo_brightness.py)."""
+def brightness(results: Path, methods: list[str]) -> dict[str, dict[str, float]]:
+    """Method -> photo -> the light's level at the diffuse probes over the truth's (scripts/photo_brightness.py)."""
     sys.path.insert(0, str(ROOT / "scripts"))
     from photo_brightness import brightness_table
 
-    table = brightness_table(results, [method])[method]
-    return dict(zip(table["photos"], table["ratio"]))
+    return {m: dict(zip(t["photos"], t["ratio"])) for m, t in brightness_table(results, methods).items()}
 
 
 def fit_record(results: Path, photo: str) -> dict | None:
@@ -87,8 +86,9 @@ def fit_record(results: Path, photo: str) -> dict | None:
 
 
 def report(out: Path, against: Path) -> str:
-    mine, theirs = brightness(out, "prior"), brightness(against, "prior")
-    ceiling = brightness(against, "prior-ceiling")
+    mine = brightness(out, ["prior"])["prior"]
+    levels = brightness(against, ["prior", "prior-ceiling"])
+    theirs, ceiling = levels["prior"], levels["prior-ceiling"]
     rows = ["| photo | level / truth: ceiling, default fit, fit from the ceiling | objective: default, from the "
             "ceiling | image term: default, from the ceiling |", "|---|:---:|:---:|:---:|"]
     deltas, lower = [], 0
