@@ -1,4 +1,5 @@
-"""What the view encoder makes of a view with and without its depth, on validation rooms.
+"""What the view encoder makes of a view with and without its depth, on validation rooms: the room's
+look, its size and its energy.
 
 Each validation panorama gives one fixed random view, cut and exposed as the encoder's training views are
 (docs/photo.md, "The view encoder"). Every encoder given reads it three ways:
@@ -9,8 +10,11 @@ Each validation panorama gives one fixed random view, cut and exposed as the enc
 
 and the decoded room is scored against the whole panorama: PSNR LDR of the radiance, depth AbsRel over the
 whole panorama, the depth error in the directions the view shows (median |ln(D̂ / D)| over its seen cells:
-the room's size as the photograph would fix it), and the exposure error |s − s*|. Paired per view against
-the first encoder read with the true depth, with 95 % bootstrap intervals.
+the room's size as the photograph would fix it), the exposure error |s − s*|, and the energy the decoded
+room delivers: the mean over 14 surface orientations of log2(Ê / E), the irradiance at the capture point
+over the truth's (0: right; −1: half the light; :mod:`roomlight.prior.losses.irradiance`). Paired per view
+against the first encoder read with the true depth, with 95 % bootstrap intervals. Two rows for scale: the
+prior's mean room (z = 0) and the prior's encoder given the *whole* panorama (out of reach from one view).
 
 Run: .venv/bin/python benchmarks/view_encoder_depth.py --data data/rooms64b \
          --encoder bundled=src/roomlight/assets/prior/view_encoder \
@@ -29,7 +33,7 @@ import numpy as np
 import torch
 
 ROOT = Path(__file__).resolve().parents[1]
-METRICS = ("psnr_ldr", "abs_rel", "seen_log_depth_error", "exposure_error")
+METRICS = ("psnr_ldr", "abs_rel", "seen_log_depth_error", "exposure_error", "irradiance_stops")
 
 
 def make_views(rad, dep, prior, n: int, seed: int = 0):
@@ -61,9 +65,22 @@ def make_views(rad, dep, prior, n: int, seed: int = 0):
     return views
 
 
+def _room_scores(prior, z, v, seen) -> dict:
+    """The decoded room of latent z (1, D) against view v's whole panorama (every metric but the exposure)."""
+    from roomlight.prior.eval.metrics import abs_rel, psnr, to_ldr
+    from roomlight.prior.losses.irradiance import irradiance_log_ratio
+
+    rad_hat, dep_hat = prior.decode(z)
+    target_r, target_d = v["radiance"][None], v["depth"][None]
+    err = torch.log(dep_hat[0, 0][seen].double() / target_d[0, 0][seen].double()).abs()
+    return {"psnr_ldr": float(psnr(to_ldr(rad_hat, target_r), to_ldr(target_r)).clamp(max=100)[0]),
+            "abs_rel": float(abs_rel(dep_hat, target_d)[0]),
+            "seen_log_depth_error": float(err.median()),
+            "irradiance_stops": float(irradiance_log_ratio(rad_hat, target_r)[0])}
+
+
 @torch.no_grad()
 def score(prior, encoder, views, mode: str) -> list[dict]:
-    from roomlight.prior.eval.metrics import abs_rel, psnr, to_ldr
     from roomlight.prior.model.view_encoder import view_input
 
     out = []
@@ -71,15 +88,22 @@ def score(prior, encoder, views, mode: str) -> list[dict]:
         part = v["guess"] if mode == "guess" else v["true"]
         x, k = view_input(part, prior.normalization, depth=(mode != "withheld"))
         z, s = encoder(x[None].float())
-        rad_hat, dep_hat = prior.decode(z)
-        target_r, target_d = v["radiance"][None], v["depth"][None]
-        seen = part.seen
-        err = torch.log(dep_hat[0, 0][seen].double() / target_d[0, 0][seen].double()).abs()
-        out.append({"psnr_ldr": float(psnr(to_ldr(rad_hat, target_r), to_ldr(target_r)).clamp(max=100)[0]),
-                    "abs_rel": float(abs_rel(dep_hat, target_d)[0]),
-                    "seen_log_depth_error": float(err.median()),
-                    "exposure_error": abs(float(s[0]) - (v["a"] - math.log(k)))})
+        exposure_error = abs(float(s[0]) - (v["a"] - math.log(k)))
+        out.append({**_room_scores(prior, z, v, part.seen), "exposure_error": exposure_error})
     return out
+
+
+@torch.no_grad()
+def reference_rows(prior, views) -> dict[str, list[dict]]:
+    """The mean room (z = 0) and the prior's encoder mean of the whole panorama, scored as the encoders are
+    (no exposure: neither reads the view)."""
+    zero = torch.zeros(1, prior.config.latent_dim)
+    rows: dict[str, list[dict]] = {"z = 0 (the mean room)": [], "the whole panorama, encoded": []}
+    for v in views:
+        whole = prior.encode(v["radiance"][None], v["depth"][None]).mean
+        for name, z in zip(rows, (zero, whole)):
+            rows[name].append({**_room_scores(prior, z, v, v["true"].seen), "exposure_error": math.nan})
+    return rows
 
 
 def paired(a: list[float], b: list[float], reps: int = 10000, seed: int = 0):
@@ -115,14 +139,19 @@ def main(argv=None) -> None:
         for label, mode in modes.items():
             rows[f"{name}, {label}"] = score(prior, enc, views, mode)
     base = next(iter(rows))
+    rows.update(reference_rows(prior, views))
     print(f"{len(views)} validation views of {args.data}; mean over views, and paired against `{base}` "
           "(mean difference [95 % bootstrap interval])\n")
-    print("| encoder, depth | PSNR LDR ↑ | depth AbsRel ↓ | depth error where seen, median abs ln ↓ | exposure error ↓ |")
-    print("|---|:---:|:---:|:---:|:---:|")
+    print("| encoder, depth | PSNR LDR ↑ | depth AbsRel ↓ | depth error where seen, median abs ln ↓ "
+          "| exposure error ↓ | irradiance, log2 ratio (0 best) |")
+    print("|---|:---:|:---:|:---:|:---:|:---:|")
     for name, rs in rows.items():
         cells = []
         for m in METRICS:
             vals = [r[m] for r in rs]
+            if any(math.isnan(x) for x in vals):
+                cells.append("–")
+                continue
             cell = f"{np.mean(vals):.3f}" if m != "psnr_ldr" else f"{np.mean(vals):.2f}"
             if name != base:
                 d, lo, hi = paired(vals, [r[m] for r in rows[base]])

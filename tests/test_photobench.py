@@ -657,12 +657,20 @@ def test_cli_make_run_report_and_one_line_errors(built, tmp_path):
         (("run-photos", tmp_path, "--out", tmp_path / "y", "--methods", "oracle"), "no manifest.json"),
         (("run-photos", out, "--out", tmp_path / "y", "--methods", "magic"), "unknown method"),
         (("report-photos", tmp_path / "nothing"), "no results"),
+        (("run-photos", out, "--out", tmp_path / "y", "--methods", "oracle", "--view-encoder", tmp_path),
+         "--view-encoder is read by the prior's methods only"),
     ]:
         r = run_cli("bench", *args)
         assert r.exit_code == 2, (args, r.output)
         assert message in r.output and "Traceback" not in r.output, (args, r.output)
         assert len([ln for ln in r.output.splitlines() if ln.strip()]) <= 3, r.output
     assert not (tmp_path / "y").exists()  # refused before anything is written
+    # results made with the prior's own view encoder are not resumed with another one
+    from roomlight.errors import RoomlightError
+    from roomlight.evaluation.photobench.runner import run_photo_benchmark
+
+    with pytest.raises(RoomlightError, match="view_encoder"):
+        run_photo_benchmark(out, res, ["oracle-envmap"], eval_spp=4, progress=False, view_encoder_name="/elsewhere")
 
 
 @pytest.mark.mitsuba

@@ -337,3 +337,66 @@ def test_an_encoder_trained_for_a_training_run_is_tied_to_its_best_weights(tiny_
     assert ViewEncoder.from_pretrained(tmp_path / "enc" / "best").prior_sha256 == expected
     shutil.copytree(tmp_path / "enc" / "best", tmp_path / "run" / "best" / "view_encoder")
     assert PanoVAE.from_pretrained(tmp_path / "run" / "best").view_encoder is not None
+
+
+def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_error(tiny_prior, tmp_path):
+    import json
+
+    from roomlight.prior.data.toy import write_toy_dataset
+    from roomlight.prior.losses.irradiance import irradiance_at_centre
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
+
+    write_toy_dataset(tmp_path / "data" / "train", 4, height=16)
+    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
+    cfg = ViewTrainConfig(batch_size=2, max_steps=1, val_every=1, ckpt_every=1, val_views=2, log_every=1,
+                          progress=False)
+    run = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None)
+    v = run.val
+    torch.manual_seed(1)
+    z, s = torch.randn(2, tiny_prior.config.latent_dim), torch.zeros(2)
+    off = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"])
+    run.cfg = cfg.replace(irradiance_weight=0.5)
+    on = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"])
+    # the term by hand: 14 normals' irradiance, log-L1 per channel
+    rad_hat, _ = tiny_prior.decode(z)
+    e_hat, e = irradiance_at_centre(rad_hat), irradiance_at_centre(v["radiance"])
+    by_hand = (torch.log(e_hat + 1e-6) - torch.log(e + 1e-6)).abs().mean()
+    assert float(on["irradiance"]) == pytest.approx(float(by_hand), rel=1e-4)
+    assert float(on["total"] - off["total"]) == pytest.approx(0.5 * float(by_hand), rel=1e-4)
+    # validation and the two references report the energy bias in stops
+    run.cfg = cfg
+    run.fit()
+    log = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
+    ref = next(e for e in log if e["event"] == "reference")
+    val = next(e for e in log if e["event"] == "val")
+    assert {"zero_irradiance_stops", "full_irradiance_stops"} <= set(ref) and "irradiance_stops" in val
+
+
+def test_a_run_without_the_irradiance_setting_resumes_as_weight_zero():
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+
+    saved = ViewTrainConfig().to_dict()
+    saved.pop("irradiance_weight")
+    assert ViewTrainConfig.from_dict(saved).irradiance_weight == 0.0
+    with pytest.raises(Exception, match="out of range"):
+        ViewTrainConfig(irradiance_weight=-1.0)
+
+
+def test_an_explicit_view_encoder_for_other_prior_weights_is_refused_in_one_line(tiny_prior, tmp_path):
+    from roomlight.cli.common import InputError, set_view_encoder
+
+    encoder = ViewEncoder.from_prior(tiny_prior)
+    encoder.prior_sha256 = "b" * 64
+    encoder.save_pretrained(tmp_path / "enc", training_config={})
+    held, before = tiny_prior._weights_sha256, tiny_prior.view_encoder
+    try:
+        tiny_prior._weights_sha256 = "a" * 64
+        with pytest.raises(InputError, match="trained for other prior weights"):
+            set_view_encoder(tiny_prior, tmp_path / "enc")
+        tiny_prior._weights_sha256 = "b" * 64
+        set_view_encoder(tiny_prior, tmp_path / "enc")
+        assert tiny_prior.view_encoder is not None and tiny_prior.view_encoder.prior_sha256 == "b" * 64
+    finally:
+        tiny_prior._weights_sha256 = held
+        tiny_prior.set_view_encoder(before)

@@ -163,6 +163,20 @@ def fail(message: str) -> None:
     raise InputError(message)
 
 
+def set_view_encoder(prior, path) -> None:
+    """Read photographs with the view encoder in ``path`` (``--view-encoder``, a folder written by
+    train-view-encoder) instead of the one beside ``prior``; one trained for other prior weights is
+    refused, as its latents would mean nothing to this decoder."""
+    from roomlight.prior.model.view_encoder import ViewEncoder
+
+    encoder = ViewEncoder.from_pretrained(path, prior.config)
+    ours = getattr(prior, "_weights_sha256", None)
+    if encoder.prior_sha256 is not None and ours is not None and encoder.prior_sha256 != ours:
+        fail(f"--view-encoder {path}: trained for other prior weights than the prior in use; "
+             "pass that prior's --model, or train an encoder for this one with `roomlight train-view-encoder`")
+    prior.set_view_encoder(encoder)
+
+
 def load_prior(model, needed_by: str, device: str | None = None):
     """The prior of ``--model MODEL`` (a model folder, a training run or the authors' run), or the
     bundled one when MODEL is None, on the device Mitsuba renders on so that decoded maps reach the

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from roomlight.cli.common import FINITE, default_of, load_prior, parse_sets
+from roomlight.cli.common import FINITE, default_of, load_prior, parse_sets, set_view_encoder
 from roomlight.fitting.methods import method as method_record
 from roomlight.fitting.photo.config import PHOTO_PRESETS, PhotoFitConfig
 from roomlight.fitting.photo.fitter import PHOTO_METHODS
@@ -103,9 +103,7 @@ def command(image, out_dir, depth, depth_kind, mask, normals, fov, intrinsics, p
     if any(method_record(m).takes_model_option(model is not None) for m in (method, *compare)):
         prior, _ = load_prior(model, f"--method {method}")
         if view_encoder is not None:
-            from roomlight.prior.model.view_encoder import ViewEncoder
-
-            prior.set_view_encoder(ViewEncoder.from_pretrained(view_encoder, prior.config))
+            set_view_encoder(prior, view_encoder)
     click.echo(f"{case.files['image']}: {case.width}x{case.height}, {len(case.objects.ids)} object(s), "
                f"{case.depth_kind} depth from {case.files['depth']}", err=True)
     run_photo(case, method, cfg, out_dir, model=prior, compare=compare, progress=not quiet, resume=not restart,

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
-from roomlight.cli.common import FINITE, RESOLUTION, default_of, echo_run_summary, load_prior, parse_sets, sets_option
+from roomlight.cli.common import (FINITE, RESOLUTION, default_of, echo_run_summary, load_prior, parse_sets,
+                                 set_view_encoder, sets_option)
 from roomlight.evaluation.photobench.config import SUITES, PhotoBenchConfig, suite_config
 from roomlight.evaluation.photobench.runner import DEFAULT_EVAL_SPP, DEFAULT_METHODS, KNOWN_METHODS
 
@@ -113,6 +116,9 @@ def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, i
                    "no depth, no mask).")
 @click.option("--model", type=click.Path(), default=None,
               help="Trained prior for the prior methods [default: the prior bundled with roomlight].")
+@click.option("--view-encoder", "view_encoder", type=click.Path(exists=True, file_okay=False), default=None,
+              help="The prior methods read each photo with this view encoder (a folder written by "
+                   "train-view-encoder, e.g. RUN/best) instead of the one beside the prior.")
 @click.option("--preset", default="paper", show_default=True,
               help="The fit-photo preset (paper, balanced, fast; see `roomlight fit-photo --help`).")
 @click.option("--eval-spp", type=int, default=DEFAULT_EVAL_SPP, show_default=True,
@@ -122,7 +128,7 @@ def make_photos(out_dir, suite, captured_lights, n, seed, res, spp, probe_spp, i
               help="Run the cases on the workers of this Dask scheduler (tcp://host:8786); needs roomlight[dask].")
 @sets_option("fit-photo setting")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, scheduler, sets, quiet):
+def run_photos(bench, out_dir, methods, model, view_encoder, preset, eval_spp, shard, scheduler, sets, quiet):
     """Fit every photo of BENCH with each method and score the probes under the recovered light.
 
     Photos built with inserted objects (make-photos --inserts, default 2) also get them composited under
@@ -146,9 +152,14 @@ def run_photos(bench, out_dir, methods, model, preset, eval_spp, shard, schedule
     prior = model_name = None
     if with_prior:
         prior, model_name = load_prior(model, f"--methods {','.join(with_prior)}")
+        if view_encoder is not None:
+            set_view_encoder(prior, view_encoder)
+    elif view_encoder is not None:
+        raise click.UsageError(f"--view-encoder is read by the prior's methods only, not by {methods}")
     summary = run_photo_benchmark(bench, out_dir, method_list, preset, prior, eval_spp, _shard(shard),
                                   progress=not quiet, overrides=parse_sets(sets), model_name=model_name,
-                                  scheduler=scheduler)
+                                  scheduler=scheduler,
+                                  view_encoder_name=None if view_encoder is None else str(Path(view_encoder).resolve()))
     echo_run_summary("run-photos", summary, out_dir)
 
 

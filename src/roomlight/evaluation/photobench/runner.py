@@ -231,7 +231,8 @@ def rescore_insertions(cases, out_dir) -> tuple[list[str], dict[str, str]]:
 
 def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper", model=None,
                         eval_spp: int = DEFAULT_EVAL_SPP, shard=(0, 1), progress: bool = True, fit=None,
-                        model_name: str | None = None, overrides: dict | None = None, scheduler=None) -> RunSummary:
+                        model_name: str | None = None, overrides: dict | None = None, scheduler=None,
+                        view_encoder_name: str | None = None) -> RunSummary:
     """Run (a shard of) the photo benchmark; see the module docstring.
 
     Args:
@@ -241,6 +242,8 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
             model: the prior for the prior methods.
         fit: the fitting function (default: :func:`~roomlight.evaluation.photobench.adapter.fit_photo_case`).
         model_name: where the prior came from, recorded in ``run.json``.
+        view_encoder_name: where the prior's view encoder came from when it is not the one beside the
+            prior (``--view-encoder``); recorded, and a results folder made with another is refused.
         scheduler: a Dask scheduler address (or cluster): run the cases on its workers, as ``bench run``.
     """
     methods = check_methods(methods, KNOWN_METHODS) if methods else DEFAULT_METHODS
@@ -254,7 +257,8 @@ def run_photo_benchmark(bench_dir, out_dir, methods=None, preset: str = "paper",
                 "overrides": dict(overrides or {}), "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH}
     if model_name is not None:
         settings["model"] = str(model_name)
-    check_run_file(out, settings, ("preset", "overrides", "eval_spp", "max_depth"))
+    settings["view_encoder"] = None if view_encoder_name is None else str(view_encoder_name)
+    check_run_file(out, settings, ("preset", "overrides", "eval_spp", "max_depth", "view_encoder"))
     rescored, stale = rescore_insertions(cases, out)
     one = partial(run_photo_case, out_dir=out, preset=preset, model=model, eval_spp=eval_spp, fit=fit,
                   progress=False, overrides=overrides)

@@ -58,6 +58,11 @@ class ViewTrainConfig(StrictConfig):
     latent_weight: float = 1.0
     #: Weight of the squared error of the log exposure s.
     exposure_weight: float = 0.1
+    #: Weight of the log-L1 error of the decoded room's irradiance at the capture point, on surfaces
+    #: facing 14 directions (:func:`roomlight.prior.losses.irradiance.irradiance_loss`): keeps the
+    #: energy of the unseen part of the room, which per-pixel losses let a guess smear and dim.
+    #: 0 (the bundled encoders') leaves it out of the objective; it is scored at validation either way.
+    irradiance_weight: float = 0.0
     #: Validation views (one per validation room, fixed) and how often they are scored.
     val_views: int = 96
     val_every: int = 250
@@ -74,7 +79,7 @@ class ViewTrainConfig(StrictConfig):
     def __post_init__(self):
         ok = (self.batch_size >= 1 and self.max_steps >= 1 and self.lr > 0 and 0 < self.fov_deg[0] <= self.fov_deg[1] < 170
               and 0 < self.exposure_key[0] <= self.exposure_key[1] and self.occluders >= 0 and self.val_views >= 1
-              and 0.0 <= self.depth_dropout <= 1.0)
+              and 0.0 <= self.depth_dropout <= 1.0 and self.irradiance_weight >= 0.0)
         if not ok:
             raise RoomlightError(f"view-encoder training settings out of range: {self.to_dict()}")
         LossConfig.from_dict(self.loss)

@@ -4,11 +4,15 @@ Each step draws ``batch_size`` training panoramas, cuts one random view of each
 (:func:`~roomlight.prior.viewenc.views.training_view`), and minimises
 
     L = L_rec(decode(z), X) + latent_weight · mean_d (z_d - mu_d(X))^2 + exposure_weight · (s - s*)^2
+        + irradiance_weight · L_irr(decode(z), X)
 
 where X is the whole (z-scored) panorama, L_rec the prior's reconstruction losses (L1, Scharr
 gradients, peak; :func:`roomlight.prior.losses.vae_loss` without its KL term) through the frozen
-decoder, and mu(X) the prior encoder's posterior mean of the whole panorama. The prior's weights
-never change; only the view encoder learns.
+decoder, mu(X) the prior encoder's posterior mean of the whole panorama, and L_irr the log-L1 error
+of the irradiance at the capture point (:mod:`roomlight.prior.losses.irradiance`; weight 0 by
+default). The prior's weights never change; only the view encoder learns. Validation also reports
+``irradiance_stops``, the decoded room's mean log2 irradiance ratio to the truth's (negative: the
+guess is too dim).
 
 Run folder::
 
@@ -34,6 +38,7 @@ import torch
 
 from roomlight.errors import RoomlightError
 from roomlight.prior.losses import vae_loss
+from roomlight.prior.losses.irradiance import irradiance_log_ratio, irradiance_loss
 from roomlight.prior.model.view_encoder import ViewEncoder
 from roomlight.prior.train import checkpoint as ck
 from roomlight.prior.train.config import config_differences
@@ -44,7 +49,10 @@ from roomlight.prior.viewenc.views import training_view
 
 __all__ = ["ViewEncoderTrainer", "load_panoramas", "TERMS"]
 
-TERMS = ("total", "l1_radiance", "l1_depth", "grad_radiance", "grad_depth", "peak", "latent", "exposure")
+#: The validation scores logged for the two reference starts (z = 0, the whole panorama's encoder mean).
+REFERENCE_SCORES = ("total", "psnr_ldr", "abs_rel", "irradiance_stops")
+
+TERMS = ("total", "l1_radiance", "l1_depth", "grad_radiance", "grad_depth", "peak", "latent", "exposure", "irradiance")
 
 
 def load_panoramas(data_dir, split: str, resolution, limit: int | None = None, note=print
@@ -192,7 +200,10 @@ class ViewEncoderTrainer:
         t = {k: t[k] for k in TERMS if k in t}
         t["latent"] = (z - mean).square().mean()
         t["exposure"] = (s - s_target).square().mean()
+        t["irradiance"] = irradiance_loss(norm.denormalize(x_hat)[0], radiance)
         t["total"] = t["total"] + self.cfg.latent_weight * t["latent"] + self.cfg.exposure_weight * t["exposure"]
+        if self.cfg.irradiance_weight > 0:
+            t["total"] = t["total"] + self.cfg.irradiance_weight * t["irradiance"]
         return t
 
     def train_step(self) -> dict:
@@ -235,6 +246,7 @@ class ViewEncoderTrainer:
         out = {k: float(t) for k, t in terms.items()}
         out["psnr_ldr"] = float(psnr(to_ldr(rad_hat, v["radiance"]), to_ldr(v["radiance"])).clamp(max=100).mean())
         out["abs_rel"] = float(abs_rel(dep_hat, v["depth"]).mean())
+        out["irradiance_stops"] = float(irradiance_log_ratio(rad_hat, v["radiance"]).mean())
         return out
 
     @torch.no_grad()
@@ -271,8 +283,8 @@ class ViewEncoderTrainer:
         v = self.val
         zero = self._scores(torch.zeros_like(v["mean"]), v["s"])
         full = self._scores(v["mean"], v["s"])
-        out = {f"zero_{k}": val for k, val in zero.items() if k in ("total", "psnr_ldr", "abs_rel")}
-        out.update({f"full_{k}": val for k, val in full.items() if k in ("total", "psnr_ldr", "abs_rel")})
+        out = {f"zero_{k}": val for k, val in zero.items() if k in REFERENCE_SCORES}
+        out.update({f"full_{k}": val for k, val in full.items() if k in REFERENCE_SCORES})
         out["seen_fraction"] = v["seen"]
         return out
 
