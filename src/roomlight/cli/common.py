@@ -170,8 +170,7 @@ def set_view_encoder(prior, path) -> None:
     from roomlight.prior.model.view_encoder import ViewEncoder
 
     encoder = ViewEncoder.from_pretrained(path, prior.config)
-    ours = getattr(prior, "_weights_sha256", None)
-    if encoder.prior_sha256 is not None and ours is not None and encoder.prior_sha256 != ours:
+    if not encoder.trained_for(getattr(prior, "_weights_sha256", None)):
         fail(f"--view-encoder {path}: trained for other prior weights than the prior in use; "
              "pass that prior's --model, or train an encoder for this one with `roomlight train-view-encoder`")
     prior.set_view_encoder(encoder)

@@ -146,6 +146,11 @@ class ViewEncoder(nn.Module):
     #: SHA-256 of the prior's weights file this encoder was trained for (saved with it).
     prior_sha256: str | None = None
 
+    def trained_for(self, prior_sha256: str | None) -> bool:
+        """Whether this encoder may read for the prior whose weights have checksum ``prior_sha256``:
+        false only when both checksums are known and differ (its latents would mean nothing there)."""
+        return self.prior_sha256 is None or prior_sha256 is None or self.prior_sha256 == prior_sha256
+
     def save_pretrained(self, directory, training_config: dict | None = None) -> Path:
         """``model.safetensors`` + ``config.json`` in ``directory``; :attr:`prior_sha256` ties the
         encoder to the weights of the decoder it was trained for."""
@@ -197,7 +202,7 @@ def load_view_encoder_beside(prior_dir, prior_config: ModelConfig, prior_sha256:
     encoder = ViewEncoder.from_pretrained(folder, prior_config)
     weights = Path(prior_dir) / WEIGHTS_NAME
     if encoder.prior_sha256 is not None and weights.exists() and \
-            (prior_sha256 or file_sha256(weights)) != encoder.prior_sha256:
+            not encoder.trained_for(prior_sha256 or file_sha256(weights)):
         warnings.warn(f"{folder}: trained for other prior weights than {weights}; not used "
                       "(retrain it with `roomlight train-view-encoder`)", stacklevel=2)
         return None
