@@ -12,7 +12,9 @@ and the decoded room is scored against the whole panorama: PSNR LDR of the radia
 whole panorama, the depth error in the directions the view shows (median |ln(D̂ / D)| over its seen cells:
 the room's size as the photograph would fix it), the exposure error |s − s*|, and the energy the decoded
 room delivers: the mean over 14 surface orientations of log2(Ê / E), the irradiance at the capture point
-over the truth's (0: right; −1: half the light; :mod:`roomlight.prior.losses.irradiance`). Paired per view
+over the truth's (0: right; −1: half the light; :mod:`roomlight.prior.losses.irradiance`), and the same
+after the decoded room is scaled to the truth's log-average on the cells the view shows (what a photo fit's
+exposure match does, so the column is the unseen room's energy relative to the seen part). Paired per view
 against the first encoder read with the true depth, with 95 % bootstrap intervals. Two rows for scale: the
 prior's mean room (z = 0) and the prior's encoder given the *whole* panorama (out of reach from one view).
 
@@ -33,7 +35,8 @@ import numpy as np
 import torch
 
 ROOT = Path(__file__).resolve().parents[1]
-METRICS = ("psnr_ldr", "abs_rel", "seen_log_depth_error", "exposure_error", "irradiance_stops")
+METRICS = ("psnr_ldr", "abs_rel", "seen_log_depth_error", "exposure_error", "irradiance_stops",
+           "irradiance_seen_stops")
 
 
 def make_views(rad, dep, prior, n: int, seed: int = 0):
@@ -76,7 +79,8 @@ def _room_scores(prior, z, v, seen) -> dict:
     return {"psnr_ldr": float(psnr(to_ldr(rad_hat, target_r), to_ldr(target_r)).clamp(max=100)[0]),
             "abs_rel": float(abs_rel(dep_hat, target_d)[0]),
             "seen_log_depth_error": float(err.median()),
-            "irradiance_stops": float(irradiance_log_ratio(rad_hat, target_r)[0])}
+            "irradiance_stops": float(irradiance_log_ratio(rad_hat, target_r)[0]),
+            "irradiance_seen_stops": float(irradiance_log_ratio(rad_hat, target_r, seen=seen[None])[0])}
 
 
 @torch.no_grad()
@@ -143,8 +147,8 @@ def main(argv=None) -> None:
     print(f"{len(views)} validation views of {args.data}; mean over views, and paired against `{base}` "
           "(mean difference [95 % bootstrap interval])\n")
     print("| encoder, depth | PSNR LDR ↑ | depth AbsRel ↓ | depth error where seen, median abs ln ↓ "
-          "| exposure error ↓ | irradiance, log2 ratio (0 best) |")
-    print("|---|:---:|:---:|:---:|:---:|:---:|")
+          "| exposure error ↓ | irradiance, log2 ratio (0 best) | the same, seen part matched (0 best) |")
+    print("|---|:---:|:---:|:---:|:---:|:---:|:---:|")
     for name, rs in rows.items():
         cells = []
         for m in METRICS:

@@ -93,3 +93,78 @@ def test_the_loss_gradient_matches_finite_differences():
     target = torch.rand(2, 3, 6, 12, dtype=torch.float64) + 0.1
     pred = (torch.rand(2, 3, 6, 12, dtype=torch.float64) + 0.1).requires_grad_(True)
     assert torch.autograd.gradcheck(lambda p: irradiance_loss(p, target), (pred,), eps=1e-6, atol=1e-6)
+
+
+def _two_hemispheres(h, upper, lower):
+    """(1, 3, h, 2h) grey radiance ``upper`` above the horizon and ``lower`` below it, and the (1, h, 2h)
+    mask of the lower hemisphere (the part a downward view would see)."""
+    d = pixel_directions(h, 2 * h, dtype=torch.float64)
+    up = (d[..., 1] > 0).double()
+    rad = upper * up + lower * (1.0 - up)
+    return torch.stack([rad] * 3)[None], (up == 0)[None]
+
+
+def test_seen_matching_leaves_only_the_unseen_parts_energy_relative_to_the_seen_part():
+    from roomlight.prior.losses.irradiance import seen_matched
+
+    # truth: ceiling 1, floor 0.5; the view sees the floor. The guess is 7x too bright overall and its
+    # ceiling is twice the truth's relative to its floor: after matching, floor 0.5 and ceiling 2.
+    target, floor = _two_hemispheres(128, 1.0, 0.5)
+    guess, _ = _two_hemispheres(128, 7.0 * 2.0, 7.0 * 0.5)
+    matched = seen_matched(guess, target, floor)
+    assert torch.allclose(matched[0, :, floor[0]], torch.full_like(matched[0, :, floor[0]], 0.5))
+    assert torch.allclose(matched[0, :, ~floor[0]], torch.full_like(matched[0, :, ~floor[0]], 2.0))
+    # a tilted surface gets pi (L_up (1 + cos t) + L_down (1 - cos t)) / 2 (the overcast-sky formula twice)
+    cos_t = IRRADIANCE_NORMALS[:, 1]
+    expected = torch.log2((2.0 * (1 + cos_t) + 0.5 * (1 - cos_t)) / (1.0 * (1 + cos_t) + 0.5 * (1 - cos_t))).mean()
+    assert float(irradiance_log_ratio(guess, target, seen=floor)[0]) == pytest.approx(float(expected), abs=5e-3)
+    # without the matching the overall factor 7 dominates
+    assert float(irradiance_log_ratio(guess, target)[0]) > float(expected) + 2.5
+
+
+def test_the_seen_matched_loss_is_blind_to_the_guesss_overall_level_and_its_gradient_too():
+    torch.manual_seed(0)
+    target = torch.rand(2, 3, 16, 32, dtype=torch.float64) + 0.05
+    guess = torch.rand(2, 3, 16, 32, dtype=torch.float64) + 0.05
+    seen = torch.zeros(2, 16, 32, dtype=torch.bool)
+    seen[0, 8:, :10], seen[1, 4:12, 5:20] = True, True
+    base = float(irradiance_loss(guess, target, seen=seen))
+    # (exactly blind but for the 1e-6 added to the luminance before its log: luminances here are >= 0.05)
+    assert float(irradiance_loss(5.0 * guess, target, seen=seen)) == pytest.approx(base, rel=1e-4)
+    alpha = torch.tensor(1.0, dtype=torch.float64, requires_grad=True)
+    irradiance_loss(alpha * guess, target, seen=seen).backward()
+    assert abs(float(alpha.grad)) < 1e-4
+    # a guess equal to the truth up to a factor costs nothing
+    assert float(irradiance_loss(0.3 * target, target, seen=seen)) == pytest.approx(0.0, abs=1e-4)
+    # and the gradient in the guess's pixels agrees with finite differences
+    g = guess[:1, :, ::4, ::4].clone().requires_grad_(True)
+    t, m = target[:1, :, ::4, ::4], seen[:1, ::4, ::4]
+    assert torch.autograd.gradcheck(lambda x: irradiance_loss(x, t, seen=m), (g,), eps=1e-6, atol=1e-6)
+
+
+def test_seen_matching_agrees_with_the_photo_fits_exposure_match_on_cells_of_equal_solid_angle():
+    from roomlight.core.geometry.equirect import pixel_directions as dirs_of
+    from roomlight.fitting.photo.placement import matching_log_exposure
+    from roomlight.prior.losses.irradiance import seen_matched
+
+    torch.manual_seed(3)
+    h, w = 16, 32
+    target = 0.05 + 0.9 * torch.rand(1, 3, h, w, dtype=torch.float64)
+    guess = 0.02 + 3.0 * torch.rand(1, 3, h, w, dtype=torch.float64)
+    seen = torch.zeros(1, h, w, dtype=torch.bool)
+    seen[0, 11, 3:25] = True  # one row: every cell the same solid angle
+    factor = float((seen_matched(guess, target, seen) / guess)[0, 0, 0, 0])
+    d = dirs_of(h, w, dtype=torch.float64)[seen[0]]
+    observed = target[0].permute(1, 2, 0)[seen[0]].numpy()
+    log_k = matching_log_exposure(guess[0].permute(1, 2, 0).float(), d.numpy(), observed)
+    assert math.log(factor) == pytest.approx(log_k, abs=2e-3)
+
+
+def test_a_panorama_with_nothing_seen_is_left_as_is_and_a_wrong_mask_is_refused():
+    from roomlight.errors import ShapeError
+    from roomlight.prior.losses.irradiance import seen_matched
+
+    guess, target = torch.rand(1, 3, 8, 16) + 0.1, torch.rand(1, 3, 8, 16) + 0.1
+    assert torch.equal(seen_matched(guess, target, torch.zeros(1, 8, 16, dtype=torch.bool)), guess)
+    with pytest.raises(ShapeError, match="mask"):
+        seen_matched(guess, target, torch.zeros(1, 8, 8, dtype=torch.bool))

@@ -355,9 +355,10 @@ def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_
     v = run.val
     torch.manual_seed(1)
     z, s = torch.randn(2, tiny_prior.config.latent_dim), torch.zeros(2)
-    off = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"])
+    seen = v["x"][:, -1] > 0.5
+    off = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
     run.cfg = cfg.replace(irradiance_weight=0.5)
-    on = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"])
+    on = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
     # the term by hand: 14 normals' irradiance, log-L1 per channel
     rad_hat, _ = tiny_prior.decode(z)
     e_hat, e = irradiance_at_centre(rad_hat), irradiance_at_centre(v["radiance"])
@@ -370,7 +371,44 @@ def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_
     log = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
     ref = next(e for e in log if e["event"] == "reference")
     val = next(e for e in log if e["event"] == "val")
-    assert {"zero_irradiance_stops", "full_irradiance_stops"} <= set(ref) and "irradiance_stops" in val
+    assert {"zero_irradiance_stops", "full_irradiance_stops", "zero_irradiance_seen_stops"} <= set(ref)
+    assert {"irradiance_stops", "irradiance_seen_stops"} <= set(val)
+
+
+def test_the_seen_matched_irradiance_term_scales_the_decoded_room_to_the_views_seen_cells(tiny_prior, tmp_path):
+    from roomlight.core.geometry.equirect import pixel_solid_angles
+    from roomlight.prior.data.toy import write_toy_dataset
+    from roomlight.prior.losses.irradiance import irradiance_at_centre
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
+
+    write_toy_dataset(tmp_path / "data" / "train", 4, height=16)
+    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
+    cfg = ViewTrainConfig(batch_size=2, max_steps=1, val_every=1, ckpt_every=1, val_views=2, log_every=1,
+                          progress=False, irradiance_weight=1.0, irradiance_seen_matched=True)
+    run = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None)
+    v = run.val
+    seen = v["x"][:, -1] > 0.5
+    assert bool(seen.any(-1).any(-1).all()) and not bool(seen.all())
+    torch.manual_seed(2)
+    z, s = torch.randn(2, tiny_prior.config.latent_dim), torch.zeros(2)
+    term = float(run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)["irradiance"])
+    # by hand, in float64: the decoded room scaled so its seen cells' solid-angle weighted mean log
+    # luminance is the truth's, then the 14 normals' log-L1
+    rad_hat = tiny_prior.decode(z)[0].double()
+    rad = v["radiance"].double()
+    w = seen.double() * pixel_solid_angles(*seen.shape[-2:], dtype=torch.float64)
+    luma = torch.tensor([0.2126, 0.7152, 0.0722], dtype=torch.float64)
+
+    def mean_log(r):
+        return (w * torch.log(torch.einsum("c,bchw->bhw", luma, r) + 1e-6)).sum((1, 2)) / w.sum((1, 2))
+
+    scaled = rad_hat * torch.exp(mean_log(rad) - mean_log(rad_hat))[:, None, None, None]
+    e_hat, e = irradiance_at_centre(scaled), irradiance_at_centre(rad)
+    by_hand = (torch.log(e_hat + 1e-6) - torch.log(e + 1e-6)).abs().mean()
+    assert term == pytest.approx(float(by_hand), rel=1e-3)
+    unmatched = (torch.log(irradiance_at_centre(rad_hat) + 1e-6) - torch.log(e + 1e-6)).abs().mean()
+    assert abs(float(unmatched) - term) > 1e-3  # the scaling is not a no-op on these rooms
 
 
 def test_a_run_without_the_irradiance_setting_resumes_as_weight_zero():

@@ -63,6 +63,11 @@ class ViewTrainConfig(StrictConfig):
     #: energy of the unseen part of the room, which per-pixel losses let a guess smear and dim.
     #: 0 (the bundled encoders') leaves it out of the objective; it is scored at validation either way.
     irradiance_weight: float = 0.0
+    #: Compare that irradiance after scaling the decoded room so that the cells the view shows have
+    #: the truth's log-average luminance, as a photo fit's exposure match does
+    #: (:func:`roomlight.prior.losses.irradiance.seen_matched`): the term then asks for the unseen
+    #: part's energy relative to the seen part, the only energy a photo fit's start passes on.
+    irradiance_seen_matched: bool = False
     #: Validation views (one per validation room, fixed) and how often they are scored.
     val_views: int = 96
     val_every: int = 250

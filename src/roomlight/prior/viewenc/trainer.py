@@ -10,9 +10,11 @@ where X is the whole (z-scored) panorama, L_rec the prior's reconstruction losse
 gradients, peak; :func:`roomlight.prior.losses.vae_loss` without its KL term) through the frozen
 decoder, mu(X) the prior encoder's posterior mean of the whole panorama, and L_irr the log-L1 error
 of the irradiance at the capture point (:mod:`roomlight.prior.losses.irradiance`; weight 0 by
-default). The prior's weights never change; only the view encoder learns. Validation also reports
-``irradiance_stops``, the decoded room's mean log2 irradiance ratio to the truth's (negative: the
-guess is too dim).
+default), with ``irradiance_seen_matched`` taken after the decoded room is scaled to the truth's
+level on the cells the view shows. The prior's weights never change; only the view encoder learns.
+Validation also reports ``irradiance_stops``, the decoded room's mean log2 irradiance ratio to the
+truth's (negative: the guess is too dim), and ``irradiance_seen_stops``, the same after that scaling:
+the energy bias a photo fit starts with.
 
 Run folder::
 
@@ -50,7 +52,7 @@ from roomlight.prior.viewenc.views import training_view
 __all__ = ["ViewEncoderTrainer", "load_panoramas", "TERMS"]
 
 #: The validation scores logged for the two reference starts (z = 0, the whole panorama's encoder mean).
-REFERENCE_SCORES = ("total", "psnr_ldr", "abs_rel", "irradiance_stops")
+REFERENCE_SCORES = ("total", "psnr_ldr", "abs_rel", "irradiance_stops", "irradiance_seen_stops")
 
 TERMS = ("total", "l1_radiance", "l1_depth", "grad_radiance", "grad_depth", "peak", "latent", "exposure", "irradiance")
 
@@ -91,6 +93,11 @@ def load_panoramas(data_dir, split: str, resolution, limit: int | None = None, n
     if not rads:
         raise RoomlightError(f"{data_dir}: no usable panorama in the {split} split")
     return torch.cat(rads), torch.cat(deps), names
+
+
+def _seen_cells(x: torch.Tensor) -> torch.Tensor:
+    """(B, H, W) bool: the cells the views (B, 5, H, W) show (the input's last channel)."""
+    return x[:, -1] > 0.5
 
 
 class ViewEncoderTrainer:
@@ -190,8 +197,10 @@ class ViewEncoderTrainer:
                 "seen": float(np.mean([v.seen_fraction for v in views]))}
 
     # ------------------------------------------------------------------ objective
-    def losses(self, z, s, radiance, depth, mean, s_target) -> dict:
-        """Every term (module docstring) for a batch; ``total`` is the weighted sum."""
+    def losses(self, z, s, radiance, depth, mean, s_target, seen) -> dict:
+        """Every term (module docstring) for a batch; ``total`` is the weighted sum.
+
+        ``seen``: (B, H, W) the cells each view shows (the input's last channel)."""
         norm = self.prior.normalization
         x = norm.normalize(radiance, depth)
         x_hat = self.prior.decode_normalized(z)
@@ -200,7 +209,8 @@ class ViewEncoderTrainer:
         t = {k: t[k] for k in TERMS if k in t}
         t["latent"] = (z - mean).square().mean()
         t["exposure"] = (s - s_target).square().mean()
-        t["irradiance"] = irradiance_loss(norm.denormalize(x_hat)[0], radiance)
+        t["irradiance"] = irradiance_loss(norm.denormalize(x_hat)[0], radiance,
+                                          seen=seen if self.cfg.irradiance_seen_matched else None)
         t["total"] = t["total"] + self.cfg.latent_weight * t["latent"] + self.cfg.exposure_weight * t["exposure"]
         if self.cfg.irradiance_weight > 0:
             t["total"] = t["total"] + self.cfg.irradiance_weight * t["irradiance"]
@@ -222,7 +232,7 @@ class ViewEncoderTrainer:
             g["lr"] = lr
         self.net.train()
         z, s = self.net(x)
-        terms = self.losses(z, s, rad, dep, mean, s_target)
+        terms = self.losses(z, s, rad, dep, mean, s_target, _seen_cells(x))
         if not bool(torch.isfinite(terms["total"])):
             raise RoomlightError(f"non-finite view-encoder loss at step {self.step + 1} "
                                  f"({ {k: float(v) for k, v in terms.items()} }); rerun to continue from "
@@ -241,12 +251,14 @@ class ViewEncoderTrainer:
         from roomlight.prior.eval.metrics import abs_rel, psnr, to_ldr
 
         v = self.val
-        terms = self.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"])
+        seen = _seen_cells(v["x"])
+        terms = self.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
         rad_hat, dep_hat = self.prior.decode(z)
         out = {k: float(t) for k, t in terms.items()}
         out["psnr_ldr"] = float(psnr(to_ldr(rad_hat, v["radiance"]), to_ldr(v["radiance"])).clamp(max=100).mean())
         out["abs_rel"] = float(abs_rel(dep_hat, v["depth"]).mean())
         out["irradiance_stops"] = float(irradiance_log_ratio(rad_hat, v["radiance"]).mean())
+        out["irradiance_seen_stops"] = float(irradiance_log_ratio(rad_hat, v["radiance"], seen=seen).mean())
         return out
 
     @torch.no_grad()
