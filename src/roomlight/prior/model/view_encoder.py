@@ -40,7 +40,7 @@ from roomlight.prior.model.normalization import Normalization
 from roomlight.prior.model.weights import file_sha256, load_state_dict_checked, load_weights_file, read_config_json
 
 __all__ = ["ViewEncoder", "view_input", "view_exposure", "load_view_encoder_beside", "VIEW_ENCODER_DIR",
-           "DEPTH_OPTIONAL_DIR", "DEPTH_CHANNEL", "withhold_depth", "FORMAT_NAME", "SATURATION"]
+           "DEPTH_OPTIONAL_DIR", "DEPTH_CHANNEL", "SEEN_CHANNEL", "withhold_depth", "FORMAT_NAME", "SATURATION"]
 
 #: Where a prior's view encoder lives, inside the prior's model folder.
 VIEW_ENCODER_DIR = "view_encoder"
@@ -49,6 +49,8 @@ VIEW_ENCODER_DIR = "view_encoder"
 DEPTH_OPTIONAL_DIR = "view_encoder_depth_optional"
 #: Index of the log-depth channel in the network's input.
 DEPTH_CHANNEL = 3
+#: Index of the channel that marks the cells a view shows (1) in the network's input.
+SEEN_CHANNEL = 4
 FORMAT_NAME = "roomlight.view-encoder"
 FORMAT_VERSION = 1
 WEIGHTS_NAME = "model.safetensors"

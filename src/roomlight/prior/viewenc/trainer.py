@@ -41,7 +41,7 @@ import torch
 from roomlight.errors import RoomlightError
 from roomlight.prior.losses import vae_loss
 from roomlight.prior.losses.irradiance import irradiance_log_ratio, irradiance_loss
-from roomlight.prior.model.view_encoder import ViewEncoder
+from roomlight.prior.model.view_encoder import SEEN_CHANNEL, ViewEncoder
 from roomlight.prior.train import checkpoint as ck
 from roomlight.prior.train.config import config_differences
 from roomlight.prior.train.interrupt import Interrupted, checkpoint_interrupted, deferred_interrupts
@@ -96,8 +96,8 @@ def load_panoramas(data_dir, split: str, resolution, limit: int | None = None, n
 
 
 def _seen_cells(x: torch.Tensor) -> torch.Tensor:
-    """(B, H, W) bool: the cells the views (B, 5, H, W) show (the input's last channel)."""
-    return x[:, -1] > 0.5
+    """(B, H, W) bool: the cells the views (B, 5, H, W) show (the input's seen channel)."""
+    return x[:, SEEN_CHANNEL] > 0.5
 
 
 class ViewEncoderTrainer:
