@@ -4,10 +4,13 @@ For every photo and method, the light is rescaled by the one factor that gives i
 true mean radiance (an *exposure oracle*), and the probes are scored again. A probe render is linear in
 the light's radiance (the scene's objects do not emit), so the rescaled render is exact: nothing is
 rendered again. Prints per method the recovered/true brightness (geometric mean and median over photos,
-and how many photos are too dark) and the PSNR LDR per probe material as fitted and at the true
-brightness.
+the mean |log2| error in stops, and how many photos are too dark) and the PSNR LDR per probe material as
+fitted and at the true brightness. With ``--against OTHER`` (a run of the same photos), also how the
+level moved from OTHER to RESULTS: the mean shift of log2 brightness over the photos both hold, and the
+correlation of their per-photo log2 levels (near 1: each photo's level is set by the same thing in both).
 
 Run: .venv/bin/python scripts/photo_brightness.py RESULTS [--methods prior,prior-envmap,...] [--json FILE]
+         [--against OTHER]
      (RESULTS: a `roomlight bench run-photos` folder whose cases still hold their probe renders)
 """
 
@@ -66,18 +69,34 @@ def main(argv=None) -> None:
     ap.add_argument("results", type=Path)
     ap.add_argument("--methods", default="prior,prior-envmap,prior-samples,direct-envmap,prior-ceiling,oracle,oracle-envmap")
     ap.add_argument("--json", type=Path, help="also write the per-photo values here")
+    ap.add_argument("--against", type=Path, help="another run of the same photos: how the level moved from it")
     args = ap.parse_args(argv)
-    table = brightness_table(args.results, [m for m in args.methods.split(",") if m])
-    print("| method | recovered / true brightness: geometric mean, median | photos too dark "
-          "| PSNR LDR as fitted (diffuse / matte / mirror) | at the true brightness |")
-    print("|---|:---:|:---:|:---:|:---:|")
+    methods = [m for m in args.methods.split(",") if m]
+    table = brightness_table(args.results, methods)
+    print("| method | recovered / true brightness: geometric mean, median | level error, mean abs log2 (stops) "
+          "| photos too dark | PSNR LDR as fitted (diffuse / matte / mirror) | at the true brightness |")
+    print("|---|:---:|:---:|:---:|:---:|:---:|")
     for m, o in table.items():
         if not o["ratio"]:
             continue
         r = np.log2(o["ratio"])
         fitted = " / ".join(f"{np.mean(o['fitted'][k]):.2f}" for k in MATERIALS)
         rescaled = " / ".join(f"{np.mean(o['rescaled'][k]):.2f}" for k in MATERIALS)
-        print(f"| {m} | {2 ** r.mean():.2f}, {2 ** np.median(r):.2f} | {int((r < 0).sum())}/{len(r)} | {fitted} | {rescaled} |")
+        print(f"| {m} | {2 ** r.mean():.2f}, {2 ** np.median(r):.2f} | {np.abs(r).mean():.2f} "
+              f"| {int((r < 0).sum())}/{len(r)} | {fitted} | {rescaled} |")
+    if args.against:
+        other = brightness_table(args.against, methods)
+        print(f"\nLevel moved from {args.against} to {args.results} (log2 brightness, photos both hold):\n")
+        print("| method | photos | mean shift (stops) | correlation of per-photo levels |")
+        print("|---|:---:|:---:|:---:|")
+        for m in methods:
+            mine = dict(zip(table[m]["photos"], np.log2(table[m]["ratio"])))
+            theirs = dict(zip(other[m]["photos"], np.log2(other[m]["ratio"])))
+            common = sorted(set(mine) & set(theirs))
+            if len(common) < 2:
+                continue
+            a, b = np.array([mine[c] for c in common]), np.array([theirs[c] for c in common])
+            print(f"| {m} | {len(common)} | {(a - b).mean():+.2f} | {np.corrcoef(a, b)[0, 1]:.2f} |")
     if args.json:
         args.json.write_text(json.dumps(table, indent=1))
 

@@ -75,8 +75,26 @@ def test_the_table_prints_and_a_copy_without_images_is_refused(run, capsys, tmp_
     script = _script()
     script.main([str(res), "--methods", "dim", "--json", str(tmp_path / "b.json")])
     out = capsys.readouterr().out
-    assert "| dim | 0.35, 0.35 | 2/2 |" in out            # geometric mean and median of 0.5 and 0.25
+    assert "| dim | 0.35, 0.35 | 1.50 | 2/2 |" in out     # geometric mean and median of 0.5 and 0.25; |log2| 1 and 2
     assert json.loads((tmp_path / "b.json").read_text())["dim"]["ratio"] == pytest.approx([0.5, 0.25], rel=1e-6)
     (res / "cases" / "photo-a" / "dim" / "probes_mirror.exr").unlink()
     with pytest.raises(SystemExit, match="probe renders are missing"):
         script.main([str(res), "--methods", "dim"])
+
+
+def test_against_another_run_reports_the_levels_shift_and_how_the_photos_levels_agree(run, capsys, tmp_path):
+    import shutil
+
+    res, _ = run
+    script = _script()
+    brighter = tmp_path / "brighter"
+    shutil.copytree(res, brighter)
+    # photo a's light twice as bright (0.5 -> 1.0 of the truth), photo b's eight times (0.25 -> 2.0)
+    for photo, factor in (("photo-a", 2.0), ("photo-b", 8.0)):
+        for m in ("diffuse", "matte", "mirror"):
+            path = brighter / "cases" / photo / "dim" / f"probes_{m}.exr"
+            _write_rgb(path, factor * script._read_rgb(path))
+    script.main([str(brighter), "--methods", "dim", "--against", str(res)])
+    out = capsys.readouterr().out
+    # shifts of +1 and +3 stops: mean +2; log2 levels (-1, -2) against (0, +1): anti-correlated
+    assert "| dim | 2 | +2.00 | -1.00 |" in out
