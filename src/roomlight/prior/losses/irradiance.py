@@ -90,7 +90,7 @@ def seen_matched(pred: torch.Tensor, target: torch.Tensor, seen: torch.Tensor) -
     Returns:
         (B, 3, H, W) the scaled ``pred``.
     """
-    from roomlight.core.color import LOG_EPS, REC709_LUMA
+    from roomlight.core.color import LOG_EPS, luminance_torch
 
     check_same_shape(pred, target, "seen_matched")
     b, _, h, w = pred.shape
@@ -99,10 +99,9 @@ def seen_matched(pred: torch.Tensor, target: torch.Tensor, seen: torch.Tensor) -
     omega = pixel_solid_angles(h, w, dtype=pred.dtype, device=pred.device)  # (H, W)
     weight = seen.to(pred.dtype) * omega  # (B, H, W)
     total = weight.flatten(1).sum(1)  # (B,)
-    luma = torch.tensor(REC709_LUMA, dtype=pred.dtype, device=pred.device)
 
     def log_average(rad):
-        y = torch.einsum("c,bchw->bhw", luma, rad.clamp_min(0.0))
+        y = luminance_torch(rad.clamp_min(0.0))  # (B, H, W)
         return (weight * torch.log(y + LOG_EPS)).flatten(1).sum(1) / total.clamp_min(1e-12)
 
     log_scale = torch.where(total > 0, log_average(target) - log_average(pred), torch.zeros_like(total))

@@ -200,7 +200,7 @@ class ViewEncoderTrainer:
     def losses(self, z, s, radiance, depth, mean, s_target, seen) -> dict:
         """Every term (module docstring) for a batch; ``total`` is the weighted sum.
 
-        ``seen``: (B, H, W) the cells each view shows (the input's last channel)."""
+        ``seen``: (B, H, W) the cells each view shows (the input's seen channel)."""
         norm = self.prior.normalization
         x = norm.normalize(radiance, depth)
         x_hat = self.prior.decode_normalized(z)
