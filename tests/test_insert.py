@@ -381,8 +381,8 @@ def test_viewer_of_a_photo_fit_shows_the_photograph_and_the_probe_shading_follow
     assert r.exit_code == 0, r.output
     size = (900, 500)
     left, right, top, iw, ih = 900 - 2 * 248, 900 - 248, 8, 240, 120
-    a = screenshot(page, tmp_path / "a.png", "at=0.25,0.85&material=diffuse", size, budget_ms=900).astype(float)
-    b = screenshot(page, tmp_path / "b.png", "at=0.8,0.5&material=diffuse", size, budget_ms=900).astype(float)
+    a = screenshot(page, tmp_path / "a.png", "at=0.25,0.85&material=diffuse", size, budget_ms=300).astype(float)
+    b = screenshot(page, tmp_path / "b.png", "at=0.8,0.5&material=diffuse", size, budget_ms=300).astype(float)
 
     def region(img, x, y, w, h):
         return img[y:y + h, x:x + w]

@@ -135,3 +135,48 @@ def test_normals_of_a_depth_grid_face_the_camera_and_edges_are_flagged():
     np.testing.assert_allclose(normals[on_floor], np.tile([0, 1.0, 0], (on_floor.sum(), 1)), atol=1e-6)
     np.testing.assert_allclose(normals[on_wall], np.tile([0, 0, 1.0], (on_wall.sum(), 1)), atol=1e-6)
     assert not ok[0].any() and not ok[:, -1].any()  # no two-sided neighbourhood at the border
+
+
+def _irradiance_pair_by_pair(L, depth, q, nq, min_cosine=0.1):
+    """The texel sum written out per (point, texel) pair with explicit difference vectors: the slow,
+    obvious form of the same formula (no pooling: L and depth at the grid they are given)."""
+    h, w = depth.shape
+    dirs = pixel_directions(h, w, dtype=depth.dtype)
+    from roomlight.core.geometry.equirect import pixel_solid_angles
+    omega = pixel_solid_angles(h, w, dtype=depth.dtype)
+    pos = dirs * depth[..., None]
+    du = torch.roll(pos, -1, 1) - torch.roll(pos, 1, 1)
+    dv = torch.cat([pos[1:], pos[-1:]], 0) - torch.cat([pos[:1], pos[:-1]], 0)
+    nt = torch.nn.functional.normalize(torch.cross(du, dv, dim=-1), dim=-1)
+    nt = torch.where((nt * dirs).sum(-1, keepdim=True) > 0, -nt, nt)
+    area = depth.square() * omega / (nt * dirs).sum(-1).abs().clamp_min(min_cosine)
+    out = []
+    for qi, ni in zip(q, nq):
+        e = torch.zeros(3, dtype=L.dtype)
+        for y in range(h):
+            for x in range(w):
+                diff = pos[y, x] - qi
+                r2 = torch.maximum(diff.square().sum(), area[y, x] / (2 * math.pi))
+                d = diff / r2.sqrt()
+                solid = torch.clamp(area[y, x] * torch.clamp(-(d * nt[y, x]).sum(), min=0) / r2, max=2 * math.pi)
+                e = e + L[y, x] * torch.clamp((d * ni).sum(), min=0) * solid
+        out.append(e)
+    return torch.stack(out)
+
+
+def test_the_texel_sum_and_its_gradient_equal_the_pair_by_pair_formula():
+    # 8 x 16 texels (pooled_height above it: no pooling), a lamp, three points: one in the middle of the
+    # room, one 1 cm off the floor (its texel's floor is active), one facing a wall.
+    torch.manual_seed(3)
+    depth = (box_depth(8) * (1 + 0.1 * torch.rand(8, 16, dtype=torch.float64))).requires_grad_()
+    L = (0.2 + torch.rand(8, 16, 3, dtype=torch.float64)).requires_grad_()
+    q = torch.tensor([[0.1, 0.2, -0.3], [0.4, -1.29, 0.3], [1.5, 0.0, 0.5]], dtype=torch.float64)
+    n = torch.nn.functional.normalize(torch.tensor([[0.3, 1.0, 0.2], [0, 1.0, 0], [-1.0, 0.1, 0]],
+                                                   dtype=torch.float64), dim=-1)
+    got = irradiance(L, depth, q, n)
+    ref = _irradiance_pair_by_pair(L, depth, q, n)
+    assert torch.allclose(got, ref, rtol=1e-10, atol=1e-12)
+    g_got = torch.autograd.grad(got.square().sum(), (L, depth))
+    g_ref = torch.autograd.grad(ref.square().sum(), (L, depth))
+    for a, b in zip(g_got, g_ref):
+        assert torch.allclose(a, b, rtol=1e-8, atol=1e-10)

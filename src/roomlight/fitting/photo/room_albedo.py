@@ -41,7 +41,8 @@ import torch
 
 from roomlight.core.geometry.equirect import pixel_directions, pixel_solid_angles
 
-__all__ = ["RoomSurface", "surface_normals", "irradiance", "room_albedo_term", "apparent_albedo", "POOLED_HEIGHT"]
+__all__ = ["RoomSurface", "surface_normals", "pool_emitter", "texel_patches", "irradiance", "room_albedo_term",
+           "apparent_albedo", "POOLED_HEIGHT"]
 
 #: The emitter is pooled to this many rows (twice as many columns) before the irradiance sum: the
 #: irradiance is a smooth function of the light, and 32 x 64 texels keep the sum at a few ms.
@@ -98,7 +99,7 @@ class RoomSurface:
         return len(self.points)
 
 
-def _pool(radiance: torch.Tensor, depth: torch.Tensor | None, height: int):
+def pool_emitter(radiance: torch.Tensor, depth: torch.Tensor | None, height: int):
     """Radiance (H, W, 3) and depth (H, W) pooled to ``height`` rows (solid-angle weighted)."""
     h = radiance.shape[0]
     if h <= height:
@@ -116,6 +117,31 @@ def _pool(radiance: torch.Tensor, depth: torch.Tensor | None, height: int):
     return rad, depth
 
 
+def texel_patches(depth: torch.Tensor, min_cosine: float = 0.1):
+    """The 2.5D light's texels as flat patches: where each stands, which way it faces, how large it is.
+
+    Args:
+        depth: (h, w) radial depth of the (pooled) panorama, w = 2 h, metres.
+        min_cosine: floor of |n_j . w_j|, bounding the area of texels seen at grazing angles.
+    Returns:
+        ((h*w, 3) positions, (h*w, 3) unit normals facing the centre, (h*w,) areas in m^2).
+    """
+    h, w = depth.shape
+    dirs = pixel_directions(h, w, dtype=depth.dtype, device=depth.device)   # (h, w, 3)
+    omega = pixel_solid_angles(h, w, dtype=depth.dtype, device=depth.device)
+    pos = dirs * depth[..., None]
+    # Texel normals from the surface's tangents (columns wrap around, rows are clamped at the poles).
+    du = torch.roll(pos, -1, 1) - torch.roll(pos, 1, 1)
+    up = torch.cat([pos[:1], pos[:-1]], 0)
+    down = torch.cat([pos[1:], pos[-1:]], 0)
+    n = torch.cross(du, down - up, dim=-1)
+    n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    n = torch.where(((n * dirs).sum(-1, keepdim=True) > 0), -n, n)  # inward
+    cos_w = (n * dirs).sum(-1).abs().clamp_min(min_cosine)          # |n_j . w_j|
+    area = (depth.square() * omega / cos_w).reshape(-1)
+    return pos.reshape(-1, 3), n.reshape(-1, 3), area
+
+
 def irradiance(radiance: torch.Tensor, depth: torch.Tensor | None, points: torch.Tensor, normals: torch.Tensor,
                pooled_height: int = POOLED_HEIGHT, min_cosine: float = 0.1) -> torch.Tensor:
     """Irradiance an emitter delivers to surface points (module docstring), differentiable.
@@ -130,37 +156,29 @@ def irradiance(radiance: torch.Tensor, depth: torch.Tensor | None, points: torch
     Returns:
         (N, 3) irradiance, radiance units times steradians.
     """
-    rad, dep = _pool(radiance, depth, pooled_height)
+    rad, dep = pool_emitter(radiance, depth, pooled_height)
     h, w, _ = rad.shape
     dev, dt = rad.device, rad.dtype
-    dirs = pixel_directions(h, w, dtype=dt, device=dev)             # (h, w, 3)
-    omega = pixel_solid_angles(h, w, dtype=dt, device=dev)          # (h, w)
     normals = normals.to(dev, dt)
     L = rad.reshape(-1, 3)
     if dep is None:
+        dirs = pixel_directions(h, w, dtype=dt, device=dev)
+        omega = pixel_solid_angles(h, w, dtype=dt, device=dev)
         cos_q = (normals @ dirs.reshape(-1, 3).T).clamp_min(0)      # (N, T)
         return cos_q @ (L * omega.reshape(-1, 1))
-    pos = dirs * dep[..., None]                                     # (h, w, 3)
-    # Texel normals from the surface's tangents (columns wrap around, rows are clamped at the poles).
-    du = torch.roll(pos, -1, 1) - torch.roll(pos, 1, 1)
-    up = torch.cat([pos[:1], pos[:-1]], 0)
-    down = torch.cat([pos[1:], pos[-1:]], 0)
-    n = torch.cross(du, down - up, dim=-1)
-    n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-    n = torch.where(((n * dirs).sum(-1, keepdim=True) > 0), -n, n)  # inward
-    cos_w = (n * dirs).sum(-1).abs().clamp_min(min_cosine)          # |n_j . w_j|
-    area = (dep.square() * omega / cos_w).reshape(-1)               # (T,) patch areas, m^2
-    pos, n = pos.reshape(-1, 3), n.reshape(-1, 3)
+    pos, n, area = texel_patches(dep, min_cosine)
     q = points.to(dev, dt)
-    diff = pos[None] - q[:, None]                                   # (N, T, 3)
-    r2 = diff.square().sum(-1)
+    # Every (point, texel) quantity from dot products (three (N, T) matmuls), never an (N, T, 3)
+    # difference: the sum runs at every step of a photo fit, and the broadcast version spent most of
+    # its time (and its backward pass most of its memory) building and differentiating that tensor.
+    r2 = (q.square().sum(-1, keepdim=True) + pos.square().sum(-1)[None] - 2 * (q @ pos.T)).clamp_min(0)
     # A texel never subtends more than the hemisphere; the floor keeps the one under q finite.
-    r2 = r2.clamp_min(area[None] / (2 * math.pi))
+    r2 = torch.maximum(r2, area[None] / (2 * math.pi))
     r = r2.sqrt()
-    d = diff / r[..., None]
-    cos_q = (d * normals[:, None]).sum(-1).clamp_min(0)
-    cos_j = (-(d * n[None])).sum(-1).clamp_min(0)
-    solid = (area[None] * cos_j / r2).clamp_max(2 * math.pi)
+    towards = normals @ pos.T - (normals * q).sum(-1, keepdim=True)   # n_q . (p_j - q)
+    facing = q @ n.T - (n * pos).sum(-1)[None]                        # -n_j . (p_j - q)
+    cos_q = (towards / r).clamp_min(0)
+    solid = (area[None] * (facing / r).clamp_min(0) / r2).clamp_max(2 * math.pi)
     return (cos_q * solid) @ L
 
 

@@ -1,0 +1,145 @@
+"""Does the seen room reflect like the light's own unseen room? A diagnosis of the light's level.
+
+A 2.5D light is a room: its texels that are not lamps are walls, lit by the rest of it. Their apparent
+albedo pi L / E (E: the irradiance the whole light delivers to each texel) does not change when the light
+is scaled, while the apparent albedo of the photograph's visible room (its pixels are fixed) falls as
+the light brightens. If the walls the camera sees reflect like the walls it does not see (the same paint,
+the same kind of room), the ratio of the two medians says by how much the light's level is off:
+
+    predicted factor c = median rho_seen / median rho_unseen     (1: consistent)
+
+This script measures, on a photo benchmark run's cases, how far that assumption holds under the true
+light (the case's oracle panorama as a 2.5D light) and whether, under each fitted light, c predicts the
+level error the probes show (recovered / true mean radiance of the diffuse probes). Nothing is fitted.
+
+Run: .venv/bin/python scripts/albedo_consistency.py RESULTS [RESULTS ...] [--method prior] [--json FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def _seen_in_camera(points_light: np.ndarray, light_from_camera: np.ndarray, intrinsics) -> np.ndarray:
+    """(T,) bool: whether each light-frame point falls inside the photograph's frame (in front of it)."""
+    cam = np.linalg.inv(light_from_camera)
+    p = points_light @ cam[:3, :3].T + cam[:3, 3]
+    z = -p[:, 2]                                   # the camera looks along -z
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = intrinsics.cx + intrinsics.fx * p[:, 0] / z
+        v = intrinsics.cy - intrinsics.fy * p[:, 1] / z
+    return (z > 0) & (u >= 0) & (u <= intrinsics.width) & (v >= 0) & (v <= intrinsics.height)
+
+
+def apparent_albedos(light, surface_cam, intrinsics, trim_bright: float = 0.1) -> dict:
+    """Median apparent albedo of the visible room and of the light's unseen texels under ``light``.
+
+    Args:
+        light: a 2.5D :class:`~roomlight.core.light.Light` (its frame: camera -> light).
+        surface_cam: (points, normals, radiance) of the visible room in the camera frame (N, 3) each.
+        intrinsics: the photograph's camera at the surface's resolution.
+    Returns:
+        {"seen": median over the visible points, "unseen": median over the unseen texels, "texels": count}.
+    """
+    from roomlight.fitting.photo.room_albedo import (POOLED_HEIGHT, RoomSurface, apparent_albedo, irradiance,
+                                                       pool_emitter, texel_patches)
+
+    frame = np.asarray(light.frame, np.float64)
+    scale = float(np.cbrt(abs(np.linalg.det(frame[:3, :3]))))
+    rot = frame[:3, :3] / scale
+    pts, nrm, rad = surface_cam
+    surface = RoomSurface(pts @ frame[:3, :3].T + frame[:3, 3], nrm @ rot.T, rad)
+    seen = apparent_albedo(light.radiance, light.depth, surface).numpy()
+
+    rad_p, dep_p = pool_emitter(light.radiance, light.depth, POOLED_HEIGHT)
+    pos, n, _ = texel_patches(dep_p)
+    # Each texel as a receiver, lifted into the room by 1 % of its distance (off its own patch).
+    lifted = pos + 0.01 * pos.norm(dim=-1, keepdim=True) * n
+    e = irradiance(light.radiance, light.depth, lifted, n).mean(-1)
+    texel_albedo = (math.pi * rad_p.reshape(-1, 3).mean(-1) / e.clamp_min(1e-9)).numpy()
+    unseen = ~_seen_in_camera(pos.numpy().astype(np.float64), frame, intrinsics)
+    return {"seen": float(np.median(seen)), "unseen": float(np.median(texel_albedo[unseen])),
+            "texels": int(unseen.sum())}
+
+
+def visible_room(case_dir: Path):
+    """The photograph's unsaturated background points with reliable normals, camera frame."""
+    from roomlight.fitting.photo.case import load_photo
+    from roomlight.fitting.photo.config import photo_config
+    from roomlight.fitting.photo.geometry import build_geometry
+
+    config = photo_config("fast")
+    case = load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
+    geometry = build_geometry(case, config)
+    f = geometry.frustum
+    keep = f.normal_ok & (f.radiance.max(-1) < config.tau)
+    pts = f.points[keep] + 0.01 * np.linalg.norm(f.points[keep], axis=-1, keepdims=True) * f.normals[keep]
+    return (pts, f.normals[keep], f.radiance[keep]), geometry.intrinsics
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("results", nargs="+", type=Path, help="`roomlight bench run-photos` folders")
+    ap.add_argument("--method", default="prior", help="the fitted method whose lights are read (default prior)")
+    ap.add_argument("--json", type=Path, help="also write the per-photo rows here")
+    args = ap.parse_args(argv)
+
+    from roomlight.core.io import read_panorama
+    from roomlight.core.light import Light
+    from roomlight.evaluation.photobench.scoring import oracle_light
+    from photo_brightness import brightness_table
+
+    rows = []
+    for results in args.results:
+        table = brightness_table(results, [args.method])[args.method]
+        for photo, ratio in zip(table["photos"], table["ratio"]):
+            folder = results / "cases" / photo / args.method
+            record = json.loads((folder / "result.json").read_text())
+            case_dir = Path(record["case_dir"])
+            surface, intrinsics = visible_room(case_dir)
+            pano = read_panorama(folder / "recovered.exr")
+            fitted = Light(pano.radiance, pano.depth, "mesh", pano.metadata["light_from_camera"])
+            truth = apparent_albedos(oracle_light(case_dir, "mesh"), surface, intrinsics)
+            fit = apparent_albedos(fitted, surface, intrinsics)
+            rows.append({"set": results.name, "photo": photo, "level": float(ratio), "truth": truth, "fit": fit})
+
+    print(f"{'set':<22}{'photo':<13}{'level':>7}{'true seen':>11}{'unseen':>8}{'log2 c':>8}"
+          f"{'fit seen':>10}{'unseen':>8}{'log2 c':>8}{'corrected':>11}")
+    err0, err1, pred, actual, true_c = [], [], [], [], []
+    for r in rows:
+        ct = math.log2(r["truth"]["seen"] / r["truth"]["unseen"])
+        cf = math.log2(r["fit"]["seen"] / r["fit"]["unseen"])
+        lv = math.log2(r["level"])
+        err0.append(abs(lv))
+        err1.append(abs(lv + cf))
+        pred.append(cf)
+        actual.append(-lv)
+        true_c.append(ct)
+        print(f"{r['set']:<22}{r['photo']:<13}{r['level']:7.2f}{r['truth']['seen']:11.3f}{r['truth']['unseen']:8.3f}"
+              f"{ct:+8.2f}{r['fit']['seen']:10.3f}{r['fit']['unseen']:8.3f}{cf:+8.2f}{2 ** (lv + cf):11.2f}")
+    print()
+    sets = [r["set"] for r in rows]
+    for name in [*dict.fromkeys(sets), None]:
+        k = [i for i, x in enumerate(sets) if name is None or x == name]
+        tc = np.array(true_c)[k]
+        corr = float(np.corrcoef(np.array(pred)[k], np.array(actual)[k])[0, 1]) if len(k) > 2 else float("nan")
+        print(f"{name or 'all':<22}{len(k)} photos: under the true light log2 c mean {tc.mean():+.2f} "
+              f"(range {tc.min():+.2f} .. {tc.max():+.2f}, std {tc.std():.2f}); the fits' level error mean |log2| "
+              f"{np.mean(np.array(err0)[k]):.2f} stops, after the predicted correction {np.mean(np.array(err1)[k]):.2f}; "
+              f"correlation of predicted and needed corrections {corr:+.2f}")
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
