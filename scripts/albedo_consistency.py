@@ -24,7 +24,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -40,7 +39,7 @@ def _seen_in_camera(points_light: np.ndarray, light_from_camera: np.ndarray, int
     return (z > 0) & (u >= 0) & (u <= intrinsics.width) & (v >= 0) & (v <= intrinsics.height)
 
 
-def apparent_albedos(light, surface_cam, intrinsics, trim_bright: float = 0.1) -> dict:
+def apparent_albedos(light, surface_cam, intrinsics) -> dict:
     """Median apparent albedo of the visible room and of the light's unseen texels under ``light``.
 
     Args:

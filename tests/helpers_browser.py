@@ -31,8 +31,8 @@ def screenshot(page: Path, out: Path, fragment: str = "", size=(800, 500), budge
 
     ``budget_ms`` is Chromium's virtual time: the viewer draws the same still scene at every animation
     frame (60 per virtual second), each in software (SwiftShader), so a longer budget only repeats that
-    frame; 900 ms and 300 ms give identical screenshots of a photo fit's page, the latter in a third of
-    the time."""
+    frame; 900 ms and 300 ms give identical screenshots of a photo fit's page (the viewer test of
+    tests/test_insert.py took 42 s with the former, 15 s with the latter)."""
     from PIL import Image
 
     with tempfile.TemporaryDirectory() as profile:
