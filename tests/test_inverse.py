@@ -239,13 +239,16 @@ def test_prior_fit_moves_the_latent_and_beats_exposure_alone(side_lit):
     """The latent must carry the fit: with the bundled prior, fitting (z, s) lowers the
     fixed-seed objective clearly below fitting the exposure s alone (z frozen at 0, the mean
     room), and ends with a non-zero z. A decoder cut off from z (z detached) fails this test,
-    although exposure alone still lowers the loss."""
+    although exposure alone still lowers the loss.
+
+    Measured (one thread): after 20 steps the joint fit's best loss is 0.17 of the exposure-only fit's
+    (0.066 against 0.396) with |z| = 20.4; after 40 steps 0.14 with |z| = 25.6, at 2.7x the time."""
     from roomlight.demo import bundled_prior_path
     from roomlight.prior.model import PanoVAE
 
     scene, _, _ = side_lit
     model = PanoVAE.from_pretrained(bundled_prior_path())
-    cfg = FitConfig(iterations=40, spp=8, eval_every=10, eval_spp=32, lambda_rep=0.0)
+    cfg = FitConfig(iterations=20, spp=8, eval_every=10, eval_spp=32, lambda_rep=0.0)
     both = fit_scene(scene, "prior", cfg, model=model, progress=False)
     exposure_only = make_light("prior", scene, cfg, model=model)
     exposure_only.z.requires_grad_(False)
