@@ -40,6 +40,8 @@ def brightness_table(results: Path, methods: list[str]) -> dict:
 
     out = {m: {"photos": [], "ratio": [], "fitted": {k: [] for k in MATERIALS},
                "rescaled": {k: [] for k in MATERIALS}} for m in methods}
+    if not (results / "cases").is_dir():
+        sys.exit(f"error: {results}: not a `roomlight bench run-photos` folder (it has no cases/)")
     cases = sorted(p for p in (results / "cases").iterdir() if p.is_dir())
     if not cases:
         sys.exit(f"error: {results}: no cases (run `roomlight bench run-photos` first)")

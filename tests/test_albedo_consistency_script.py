@@ -8,6 +8,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 import torch
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "albedo_consistency.py"
@@ -55,3 +56,8 @@ def test_a_uniform_room_gives_texels_of_albedo_one_and_the_floor_its_own():
     assert abs(out["seen"] - rho) < 0.03 * rho
     assert abs(out["unseen"] - 1.0) < 0.05
     assert 0 < out["texels"] < 32 * 64
+
+
+def test_a_folder_that_is_not_a_benchmark_run_is_refused_in_one_line(tmp_path):
+    with pytest.raises(SystemExit, match="not a `roomlight bench run-photos` folder"):
+        _script().main([str(tmp_path)])

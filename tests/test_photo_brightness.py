@@ -80,6 +80,8 @@ def test_the_table_prints_and_a_copy_without_images_is_refused(run, capsys, tmp_
     (res / "cases" / "photo-a" / "dim" / "probes_mirror.exr").unlink()
     with pytest.raises(SystemExit, match="probe renders are missing"):
         script.main([str(res), "--methods", "dim"])
+    with pytest.raises(SystemExit, match="not a `roomlight bench run-photos` folder"):
+        script.main([str(tmp_path / "no-such-run"), "--methods", "dim"])
 
 
 def test_against_another_run_reports_the_levels_shift_and_how_the_photos_levels_agree(run, capsys, tmp_path):
