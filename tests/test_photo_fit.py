@@ -195,16 +195,18 @@ def test_mirror_probes_far_apart_are_better_under_the_2p5d_light(photo, prior, o
     prior's env map is as good on this small scene (0.20 and 0.19, measured without the reflectance prior),
     so the claim above holds in the paper's setting only. With today's defaults (the visible room's albedo
     bound, no reflectance prior) the errors are 1.45 and 1.40 (2.5D) against 2.12 and 2.04 (env map) from
-    the paper's start, and 0.84 and 0.71 from the view's start at 60 steps."""
+    the paper's start, and from the view's start 0.75 and 0.63 after 30 steps (0.84 and 0.71 after 60)."""
     from roomlight.core.light import Light
     from roomlight.fitting.photo import fit_photo
     from roomlight.fitting.photo.outputs import light_view
     from roomlight.fitting.photo.probes import LightView, ProbeSite, closeup_disc, render_probes
 
     _, case, truth = photo
-    cfg = _config(iterations=120, spp=8, init="samples")
+    # The best iterate is checked every 20 steps: on this case both paper-start fits end at their best step
+    # either way (the same errors as with checks every 10).
+    cfg = _config(iterations=120, spp=8, init="samples", eval_every=20)
     fits = {m: fit_photo(case, m, cfg, model=prior, progress=False) for m in ("prior", "prior-envmap")}
-    fits["prior from the view"] = fit_photo(case, "prior", cfg.override(init="view", iterations=60), model=prior,
+    fits["prior from the view"] = fit_photo(case, "prior", cfg.override(init="view", iterations=30), model=prior,
                                             progress=False)
     g = fits["prior"].geometry
     sites = []
