@@ -223,13 +223,9 @@ def test_report_without_results_fails_cleanly(tmp_path):
 
 def _compare_script():
     """scripts/compare_bench_runs.py loaded as a module."""
-    import importlib.util
+    from helpers_scripts import load_script
 
-    spec = importlib.util.spec_from_file_location(
-        "compare_bench_runs", Path(__file__).resolve().parents[1] / "scripts" / "compare_bench_runs.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("compare_bench_runs")
 
 
 def test_two_runs_compared_scene_by_scene(tmp_path, capsys):

@@ -4,7 +4,6 @@ the weights byte for byte and refuses what would silently change the product."""
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import json
 from pathlib import Path
 
@@ -13,17 +12,15 @@ import torch
 
 from roomlight.prior.model import ModelConfig, Normalization, PanoVAE
 
+from helpers_scripts import load_script
+
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
-ROOT = Path(__file__).resolve().parents[1]
 CFG = ModelConfig(resolution=(32, 64), latent_dim=8, ch=8, ch_mult=(1, 1, 2, 2), z_channels=4, norm_groups=4)
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("bundle_prior", ROOT / "scripts" / "bundle_prior.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("bundle_prior")
 
 
 def _model(seed: int, cfg: ModelConfig = CFG, metadata: dict | None = None) -> PanoVAE:

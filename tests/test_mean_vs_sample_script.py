@@ -2,26 +2,21 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
 import torch
 
 from roomlight.prior.model.normalization import Normalization
 from roomlight.prior.model.veni import VENI_PRESETS, VeniVAE
 
+from helpers_scripts import load_script
+
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
-ROOT = Path(__file__).resolve().parents[1]
 NORM = Normalization(mean=(0.3, 0.3, 0.3, 1.0), std=(0.5, 0.5, 0.5, 0.4))
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("mean_vs_sample", ROOT / "scripts" / "mean_vs_sample.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("mean_vs_sample")
 
 
 def test_split_decoding_with_one_latent_is_the_models_decoding():

@@ -3,7 +3,6 @@ whose recovered probes are known multiples of their truth."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from types import SimpleNamespace
@@ -11,14 +10,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "photo_brightness.py"
+from helpers_scripts import load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("photo_brightness", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("photo_brightness")
 
 
 def _write_rgb(path: Path, image: np.ndarray) -> None:
