@@ -28,15 +28,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
-def _seen_in_camera(points_light: np.ndarray, light_from_camera: np.ndarray, intrinsics) -> np.ndarray:
-    """(T,) bool: whether each light-frame point falls inside the photograph's frame (in front of it)."""
+def _seen_in_camera(points_light: np.ndarray, light_from_camera: np.ndarray, camera) -> np.ndarray:
+    """(T,) bool: whether each light-frame point falls inside the photograph's frame (in front of it).
+
+    ``camera``: the photograph's own :class:`~roomlight.fitting.photo.camera.PhotoCamera` (its pose the
+    identity, so its "world" is the camera frame)."""
     cam = np.linalg.inv(light_from_camera)
-    p = points_light @ cam[:3, :3].T + cam[:3, 3]
-    z = -p[:, 2]                                   # the camera looks along -z
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = intrinsics.cx + intrinsics.fx * p[:, 0] / z
-        v = intrinsics.cy - intrinsics.fy * p[:, 1] / z
-    return (z > 0) & (u >= 0) & (u <= intrinsics.width) & (v >= 0) & (v <= intrinsics.height)
+    xy, z = camera.project(points_light @ cam[:3, :3].T + cam[:3, 3])
+    return (z > 0) & (xy[:, 0] >= 0) & (xy[:, 0] <= camera.width) & (xy[:, 1] >= 0) & (xy[:, 1] <= camera.height)
 
 
 def apparent_albedos(light, surface_cam, intrinsics) -> dict:
@@ -49,21 +48,20 @@ def apparent_albedos(light, surface_cam, intrinsics) -> dict:
     Returns:
         {"seen": median over the visible points, "unseen": median over the unseen texels, "texels": count}.
     """
+    from roomlight.fitting.photo.geometry import SceneTransform
     from roomlight.fitting.photo.room_albedo import (POOLED_HEIGHT, RoomSurface, apparent_albedo, irradiance,
-                                                       pool_emitter, texel_patches)
+                                                       lifted, pool_emitter, texel_patches)
 
     frame = np.asarray(light.frame, np.float64)
-    scale = float(np.cbrt(abs(np.linalg.det(frame[:3, :3]))))
-    rot = frame[:3, :3] / scale
+    to_light = SceneTransform.from_matrix(frame)
     pts, nrm, rad = surface_cam
-    surface = RoomSurface(pts @ frame[:3, :3].T + frame[:3, 3], nrm @ rot.T, rad)
+    surface = RoomSurface(to_light.points(pts), to_light.directions(nrm), rad)
     seen = apparent_albedo(light.radiance, light.depth, surface).numpy()
 
     rad_p, dep_p = pool_emitter(light.radiance, light.depth, POOLED_HEIGHT)
     pos, n, _ = texel_patches(dep_p)
-    # Each texel as a receiver, lifted into the room by 1 % of its distance (off its own patch).
-    lifted = pos + 0.01 * pos.norm(dim=-1, keepdim=True) * n
-    e = irradiance(light.radiance, light.depth, lifted, n).mean(-1)
+    # Each texel as a receiver, lifted into the room (off its own patch) as the visible points are.
+    e = irradiance(light.radiance, light.depth, lifted(pos, n), n).mean(-1)
     texel_albedo = (math.pi * rad_p.reshape(-1, 3).mean(-1) / e.clamp_min(1e-9)).numpy()
     unseen = ~_seen_in_camera(pos.numpy().astype(np.float64), frame, intrinsics)
     return {"seen": float(np.median(seen)), "unseen": float(np.median(texel_albedo[unseen])),
@@ -75,14 +73,14 @@ def visible_room(case_dir: Path):
     from roomlight.fitting.photo.case import load_photo
     from roomlight.fitting.photo.config import photo_config
     from roomlight.fitting.photo.geometry import build_geometry
+    from roomlight.fitting.photo.room_albedo import lifted
 
     config = photo_config("fast")
     case = load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
     geometry = build_geometry(case, config)
     f = geometry.frustum
     keep = f.normal_ok & (f.radiance.max(-1) < config.tau)
-    pts = f.points[keep] + 0.01 * np.linalg.norm(f.points[keep], axis=-1, keepdims=True) * f.normals[keep]
-    return (pts, f.normals[keep], f.radiance[keep]), geometry.intrinsics
+    return (lifted(f.points[keep], f.normals[keep]), f.normals[keep], f.radiance[keep]), geometry.intrinsics
 
 
 def main(argv=None) -> int:
@@ -126,14 +124,15 @@ def main(argv=None) -> int:
         print(f"{r['set']:<22}{r['photo']:<13}{r['level']:7.2f}{r['truth']['seen']:11.3f}{r['truth']['unseen']:8.3f}"
               f"{ct:+8.2f}{r['fit']['seen']:10.3f}{r['fit']['unseen']:8.3f}{cf:+8.2f}{2 ** (lv + cf):11.2f}")
     print()
+    err0, err1, pred, actual, true_c = map(np.array, (err0, err1, pred, actual, true_c))
     sets = [r["set"] for r in rows]
     for name in [*dict.fromkeys(sets), None]:
         k = [i for i, x in enumerate(sets) if name is None or x == name]
-        tc = np.array(true_c)[k]
-        corr = float(np.corrcoef(np.array(pred)[k], np.array(actual)[k])[0, 1]) if len(k) > 2 else float("nan")
+        tc = true_c[k]
+        corr = float(np.corrcoef(pred[k], actual[k])[0, 1]) if len(k) > 2 else float("nan")
         print(f"{name or 'all':<22}{len(k)} photos: under the true light log2 c mean {tc.mean():+.2f} "
               f"(range {tc.min():+.2f} .. {tc.max():+.2f}, std {tc.std():.2f}); the fits' level error mean |log2| "
-              f"{np.mean(np.array(err0)[k]):.2f} stops, after the predicted correction {np.mean(np.array(err1)[k]):.2f}; "
+              f"{err0[k].mean():.2f} stops, after the predicted correction {err1[k].mean():.2f}; "
               f"correlation of predicted and needed corrections {corr:+.2f}")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))

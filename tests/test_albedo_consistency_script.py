@@ -3,22 +3,15 @@ the closed form of a room of uniform radiance (E = pi L everywhere inside, so ev
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 import torch
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "albedo_consistency.py"
+from helpers_scripts import load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("albedo_consistency", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("albedo_consistency")
 
 
 def _box_depth(h, half=(2.0, 1.3, 1.6)):
@@ -28,17 +21,20 @@ def _box_depth(h, half=(2.0, 1.3, 1.6)):
     return (1.0 / (d.abs() / torch.tensor(half, dtype=torch.float64)).amax(-1)).float()
 
 
-CAMERA = SimpleNamespace(width=64, height=48, fx=40.0, fy=40.0, cx=32.0, cy=24.0)
+def _camera():
+    from roomlight.fitting.photo.camera import PhotoCamera
+
+    return PhotoCamera(64, 48, 40.0, 40.0, 32.0, 24.0)
 
 
 def test_points_in_front_of_the_camera_and_inside_its_frame_are_seen():
     seen = _script()._seen_in_camera(np.array([[0, 0, -2.0], [0, 0, 2.0], [3.0, 0, -1.0], [0.5, -0.4, -2.0]]),
-                                     np.eye(4), CAMERA)
+                                     np.eye(4), _camera())
     # ahead; behind; far to the right (u = 32 + 40 * 3 = 152 > 64); low and right, inside (u 42, v 32)
     assert seen.tolist() == [True, False, False, True]
     # a light frame that turns the room half a turn about the vertical puts "behind" in front
     half_turn = np.diag([-1.0, 1.0, -1.0, 1.0])
-    assert _script()._seen_in_camera(np.array([[0, 0, 2.0]]), half_turn, CAMERA).tolist() == [True]
+    assert _script()._seen_in_camera(np.array([[0, 0, 2.0]]), half_turn, _camera()).tolist() == [True]
 
 
 def test_a_uniform_room_gives_texels_of_albedo_one_and_the_floor_its_own():
@@ -52,7 +48,7 @@ def test_a_uniform_room_gives_texels_of_albedo_one_and_the_floor_its_own():
     pts = np.column_stack([rng.uniform(-1, 1, 40), np.full(40, -1.29), rng.uniform(-1.4, -0.2, 40)])
     nrm = np.tile([0.0, 1.0, 0.0], (40, 1))
     rad = np.full((40, 3), rho * L)
-    out = script.apparent_albedos(light, (pts, nrm, rad), CAMERA)
+    out = script.apparent_albedos(light, (pts, nrm, rad), _camera())
     assert abs(out["seen"] - rho) < 0.03 * rho
     assert abs(out["unseen"] - 1.0) < 0.05
     assert 0 < out["texels"] < 32 * 64

@@ -35,7 +35,7 @@ from roomlight.fitting.photo.frustum import FrustumTarget, frustum_terms
 from roomlight.fitting.photo.geometry import PhotoGeometry, SceneTransform, build_geometry, level_transform
 from roomlight.fitting.photo.materials import ObjectMaterials
 from roomlight.fitting.photo.receivers import ShadowReceivers, shadow_receivers
-from roomlight.fitting.photo.room_albedo import RoomSurface, room_albedo_term
+from roomlight.fitting.photo.room_albedo import RoomSurface, lifted, room_albedo_term
 
 __all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
 
@@ -407,8 +407,7 @@ def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, config: Ph
         idx = np.sort(np.random.default_rng(config.seed).choice(idx, config.room_albedo_points, replace=False))
     if not len(idx):
         return None
-    # Lifted off the surface by 1 % of its distance, so the texels of its own wall do not sit on it.
-    pts = f.points[idx] + 0.01 * np.linalg.norm(f.points[idx], axis=-1, keepdims=True) * f.normals[idx]
+    pts = lifted(f.points[idx], f.normals[idx])   # off the surface, so its own wall's texels do not sit on it
     return RoomSurface(transform.points(pts), transform.directions(f.normals[idx]), f.radiance[idx])
 
 

@@ -41,8 +41,8 @@ import torch
 
 from roomlight.core.geometry.equirect import pixel_directions, pixel_solid_angles
 
-__all__ = ["RoomSurface", "surface_normals", "pool_emitter", "texel_patches", "irradiance", "room_albedo_term",
-           "apparent_albedo", "POOLED_HEIGHT"]
+__all__ = ["RoomSurface", "surface_normals", "lifted", "LIFT", "pool_emitter", "texel_patches", "irradiance",
+           "room_albedo_term", "apparent_albedo", "POOLED_HEIGHT"]
 
 #: The emitter is pooled to this many rows (twice as many columns) before the irradiance sum: the
 #: irradiance is a smooth function of the light, and 32 x 64 texels keep the sum at a few ms.
@@ -79,6 +79,19 @@ def surface_normals(points: np.ndarray, edge_tolerance: float = 0.05) -> tuple[n
         ok &= np.abs(nb - dist) <= edge_tolerance * dist
     ok &= norm[..., 0] > 0
     return n, ok
+
+
+#: A receiving point is lifted off its surface along its normal by this share of its distance from the
+#: camera (or the light's centre), so the texels of its own wall do not sit on it.
+LIFT = 0.01
+
+
+def lifted(points, normals):
+    """(N, 3) points moved off their surface by :data:`LIFT` of their distance from the origin, along their
+    (N, 3) unit normals (NumPy arrays or torch tensors alike)."""
+    norm = points.norm(dim=-1, keepdim=True) if isinstance(points, torch.Tensor) else \
+        np.linalg.norm(points, axis=-1, keepdims=True)
+    return points + LIFT * norm * normals
 
 
 class RoomSurface:
