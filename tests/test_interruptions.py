@@ -40,27 +40,27 @@ def roomlight(*args, check=True, timeout=300) -> subprocess.CompletedProcess:
 def kill_when(args, ready, sig: int, seed: int, max_delay: float, timeout: float = 240.0):
     """Start ``roomlight ARGS``, wait until ``ready()`` is true, wait a random delay, send ``sig``.
 
-    Returns (exit status, stderr); 0 when the command finished before the signal could interrupt it
-    (the caller tries again), an assertion error if it failed on its own.
+    Returns (exit status, its output: stdout and stderr together); 0 when the command finished before the
+    signal could interrupt it (the caller tries again), an assertion error if it failed on its own.
     """
     # A test run started in the background by a non-interactive shell (`make test &`) inherits SIGINT
     # as ignored, and Python then never raises KeyboardInterrupt: give the child the default disposition,
     # as a terminal's foreground job has, so that the signal is really delivered.
     proc = subprocess.Popen([sys.executable, "-m", "roomlight.cli.main", *map(str, args)], env=ENV, text=True,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,  # the notes go to either
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     t_end = time.monotonic() + timeout
     while not ready():
-        assert proc.poll() is None, f"finished before it could be interrupted: {proc.stderr.read()[-2000:]}"
+        assert proc.poll() is None, f"finished before it could be interrupted: {proc.stdout.read()[-2000:]}"
         assert time.monotonic() < t_end, "never became ready"
         time.sleep(0.02)
     time.sleep(random.Random(seed).uniform(0.0, max_delay))
     if proc.poll() is not None:  # done before the signal: no interruption to test
-        err = proc.stderr.read()
+        err = proc.stdout.read()
         assert proc.returncode == 0, f"failed on its own: {err[-2000:]}"
         return 0, err
     proc.send_signal(sig)
-    _, err = proc.communicate(timeout=120)
+    err, _ = proc.communicate(timeout=120)
     return proc.returncode, err
 
 
@@ -110,25 +110,40 @@ def straight_run(toy, tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_train_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_path):
-    """Three interruptions at random points (most land inside an optimiser step), then the rest.
+def test_train_killed_then_interrupted_then_resumed_is_bit_identical(toy, straight_run, tmp_path):
+    """SIGKILL before the first checkpoint (the run must start afresh, each step logged once), then two
+    Ctrl-Cs at random points (most land inside an optimiser step; each must checkpoint the step it logged
+    last), then the rest: the final weights equal an uninterrupted run's, bit for bit.
 
-    Ctrl-C only: SIGTERM reaches the same handler (checked in-process below, without a training run)."""
-    sig = signal.SIGINT
+    SIGTERM reaches the same handler as Ctrl-C (checked in-process below, without a training run)."""
     run = tmp_path / "run"
-    for round_ in range(3):
-        before = max(train_steps(run), default=0)
-        code, err = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS],
-                              lambda: max(train_steps(run), default=0) >= before + 2, sig,
+    code, _ = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], lambda: len(train_steps(run)) >= 2,
+                        signal.SIGKILL, seed=9, max_delay=0.3)
+    assert code == -signal.SIGKILL
+    assert not (run / "checkpoints").exists() or not any((run / "checkpoints").glob("step-*"))
+    assert train_steps(run), "the killed run had logged steps"
+    sig = signal.SIGINT
+    for round_ in range(2):
+        if round_ == 0:
+            # The afresh run rewrites the killed run's log (a new file) before its first step: wait for that.
+            killed_log = (run / "log.jsonl").stat().st_ino
+            ready = lambda: ((run / "log.jsonl").stat().st_ino != killed_log  # noqa: E731
+                             and max(train_steps(run), default=0) >= 2)
+        else:
+            before = max(train_steps(run))
+            ready = lambda: max(train_steps(run), default=0) >= before + 2  # noqa: E731
+        code, err = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], ready, sig,
                               seed=10 * int(sig) + round_, max_delay=0.3)
         assert code == 128 + sig, err[-2000:]
         assert "Traceback" not in err
+        if round_ == 0:
+            assert "no checkpoint to resume from; starting afresh at step 0" in err
         stopped = max(train_steps(run))
         assert stopped < STEPS
         assert (run / "checkpoints" / f"step-{stopped:08d}").is_dir(), "the last logged step is the one checkpointed"
     r = roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
     assert f"step {stopped} of {STEPS}" in r.stderr + r.stdout
-    assert train_steps(run) == list(range(1, STEPS + 1))
+    assert train_steps(run) == list(range(1, STEPS + 1))  # each step once
     assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
 
 
@@ -185,20 +200,6 @@ def test_train_with_threads_option_interrupted_at_a_random_step_resumes_bit_iden
                           f"{max(differing.values()):.3g}"
 
 
-@pytest.mark.slow
-def test_train_killed_before_its_first_checkpoint_starts_afresh(toy, straight_run, tmp_path):
-    run = tmp_path / "run"
-    code, _ = kill_when(["train", "--data", toy, "--out", run, *TRAIN_ARGS], lambda: len(train_steps(run)) >= 2,
-                        signal.SIGKILL, seed=9, max_delay=0.3)
-    assert code == -signal.SIGKILL
-    assert not (run / "checkpoints").exists() or not any((run / "checkpoints").glob("step-*"))
-    assert train_steps(run), "the killed run had logged steps"
-    r = roomlight("train", "--data", toy, "--out", run, *TRAIN_ARGS)
-    assert "no checkpoint to resume from; starting afresh at step 0" in r.stderr + r.stdout
-    assert train_steps(run) == list(range(1, STEPS + 1))  # each step once
-    assert_bit_identical(final_weights(run, STEPS), final_weights(straight_run, STEPS))
-
-
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_sigint_and_sigterm_are_both_deferred_to_the_end_of_the_step(sig):
     """The training loops' handler: the first signal only records itself, a second one stops at once
@@ -220,17 +221,22 @@ def test_sigint_and_sigterm_are_both_deferred_to_the_end_of_the_step(sig):
 
 # ----------------------------------------------------------------------------- synth, bench make, bench run
 # synth and bench install no handler of their own: SIGINT raises KeyboardInterrupt (the graceful path),
-# SIGTERM and SIGKILL end the process where it stands, so SIGKILL (which no code can intercept)
-# stands for both: every write must be atomic.
-ALL_SIGNALS = pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL], ids=["SIGINT", "SIGKILL"])
+# SIGTERM and SIGKILL end the process where it stands, so SIGKILL (which no code can intercept) stands
+# for both: every write must be atomic. Each command is interrupted both ways in one sequence (Ctrl-C,
+# then SIGKILL on the re-run, then the re-run to the end), which also checks that a run resumed once
+# can be stopped and resumed again.
+
+
+def finished_exrs(root: Path, pattern: str) -> list[Path]:
+    """Every EXR under ``root`` matching ``pattern`` that is not a partial or hidden temporary file."""
+    return [p for p in sorted(root.glob(pattern)) if ".partial" not in p.name and not p.name.startswith(".")]
 
 
 def exr_pixels(root: Path, pattern: str) -> dict:
     """{relative path: {channel: array}} of every finished EXR under ``root``."""
     from roomlight.core.io import read_exr
 
-    return {p.relative_to(root).as_posix(): read_exr(p) for p in sorted(root.glob(pattern))
-            if ".partial" not in p.name and not p.name.startswith(".")}
+    return {p.relative_to(root).as_posix(): read_exr(p) for p in finished_exrs(root, pattern)}
 
 
 def assert_same_exrs(a: dict, b: dict) -> None:
@@ -240,21 +246,27 @@ def assert_same_exrs(a: dict, b: dict) -> None:
             assert (a[name][ch] == b[name][ch]).all(), f"{name} channel {ch} differs"
 
 
-def interrupt_and_rerun(args, out: Path, ready, sig: int, seed: int, max_delay: float = 1.0, attempts: int = 3):
-    """Interrupt ``roomlight ARGS`` once (see :func:`kill_when`), then re-run it to completion.
+def interrupt_twice_and_rerun(args, out: Path, count, seed: int, max_delay: float = 1.0, attempts: int = 3):
+    """Ctrl-C ``roomlight ARGS`` after its first finished item, SIGKILL the re-run after it has finished
+    one more, then re-run it to completion (each signal after a random delay, see :func:`kill_when`).
 
-    On a fast machine the command may finish before the signal, or the signal may land while the
-    interpreter is already shutting down after the last item was written (Python then ignores it and
-    the command exits 0): such a run tested nothing, so the test starts over on an empty folder with
-    the signal sent as soon as the first item appears, at most ``attempts`` times.
+    ``count()`` is the number of finished items under ``out``. On a fast machine the command may finish
+    before a signal, or the signal may land while the interpreter is already shutting down after the last
+    item was written (Python then ignores it and the command exits 0): such a run tested nothing, so the
+    test starts over on an empty folder with the signals sent as soon as their item appears, at most
+    ``attempts`` times.
     """
     for attempt in range(attempts):
-        code, err = kill_when(args, ready, sig, seed=seed, max_delay=max_delay if attempt == 0 else 0.0)
+        delay = max_delay if attempt == 0 else 0.0
+        code, err = kill_when(args, lambda: count() >= 1, signal.SIGINT, seed=seed, max_delay=delay)
         if code != 0:
-            break
+            assert "Traceback" not in err, err[-2000:]  # Ctrl-C ends in one line, not a stack trace
+            done = count()
+            code, _ = kill_when(args, lambda: count() > done, signal.SIGKILL, seed=seed + 1, max_delay=delay)
+            if code != 0:
+                break
         shutil.rmtree(out)
-    assert code != 0, f"the command finished before every one of {attempts} signals"
-    assert "Traceback" not in err or sig != signal.SIGKILL
+    assert code != 0, f"the command finished before its signals in every one of {attempts} attempts"
     roomlight(*args)
 
 
@@ -272,11 +284,10 @@ def synth_straight(tmp_path_factory):
 
 @pytest.mark.slow
 @pytest.mark.mitsuba
-@ALL_SIGNALS
-def test_synth_interrupted_then_rerun_renders_every_room_once_and_identically(synth_straight, tmp_path, sig):
+def test_synth_interrupted_then_rerun_renders_every_room_once_and_identically(synth_straight, tmp_path):
     out = tmp_path / "rooms"
-    interrupt_and_rerun([*SYNTH, "--out", out], out, lambda: any(out.glob("**/*.exr")), sig, seed=int(sig),
-                        max_delay=0.3)
+    interrupt_twice_and_rerun([*SYNTH, "--out", out], out, lambda: len(finished_exrs(out, "**/*.exr")), seed=2,
+                              max_delay=0.3)
     assert_same_exrs(exr_pixels(out, "**/*.exr"), synth_straight)
     assert not list(out.glob("**/*.partial.exr")), "a partial file was left behind"
 
@@ -299,13 +310,12 @@ def manifest_scenes(bench: Path) -> list:
 
 @pytest.mark.slow
 @pytest.mark.mitsuba
-@ALL_SIGNALS
-def test_bench_make_interrupted_then_rerun_builds_every_scene_once_and_identically(toy, bench_straight, tmp_path, sig):
+def test_bench_make_interrupted_then_rerun_builds_every_scene_once_and_identically(toy, bench_straight, tmp_path):
     out = tmp_path / "bench"
-    # Six scenes and a delay of at most 0.3 s after the first: on a fast, quiet machine two scenes
+    # Six scenes and a delay of at most 0.3 s after each item: on a fast, quiet machine two scenes
     # and a 1 s delay let the command finish before the signal.
-    interrupt_and_rerun(bench_make_args(toy, out), out, lambda: any(out.glob("*/panorama.json")), sig,
-                        seed=int(sig) + 100, max_delay=0.3)
+    interrupt_twice_and_rerun(bench_make_args(toy, out), out, lambda: len(list(out.glob("*/panorama.json"))),
+                              seed=102, max_delay=0.3)
     assert manifest_scenes(out) == manifest_scenes(bench_straight)
     assert len(set(manifest_scenes(out))) == 6
     assert_same_exrs(exr_pixels(out, "*/*/*.exr"), exr_pixels(bench_straight, "*/*/*.exr"))
@@ -333,11 +343,9 @@ def run_straight(bench_straight, tmp_path_factory):
 
 @pytest.mark.slow
 @pytest.mark.mitsuba
-@ALL_SIGNALS
-def test_bench_run_interrupted_then_rerun_runs_every_case_once_and_identically(bench_straight, run_straight, tmp_path,
-                                                                              sig):
+def test_bench_run_interrupted_then_rerun_runs_every_case_once_and_identically(bench_straight, run_straight, tmp_path):
     out = tmp_path / "results"
-    interrupt_and_rerun(["bench", "run", bench_straight, "--out", out, *RUN], out,
-                        lambda: any(out.glob("cases/*/*/*/result.json")), sig, seed=int(sig) + 200)
+    interrupt_twice_and_rerun(["bench", "run", bench_straight, "--out", out, *RUN], out,
+                              lambda: len(list(out.glob("cases/*/*/*/result.json"))), seed=202)
     assert len(run_straight) == 6
     assert results(out) == run_straight
