@@ -13,7 +13,7 @@
 # Fits: the `fast` preset, probes at 64 spp; NAME starting with lr- fits at the preset's own 128 / 256
 # (render_size / geometry_size: a 192 x 256 photo averaged down to 96 x 128), otherwise at the photo's full
 # size (256 / 512). Resumable: rerun to continue (3-10 min to build a suite, 5-9 min per fit setting; about
-# 90 min in all on 2 cores). Run it on an otherwise idle machine: beside another CPU-heavy job the same fit can
+# 100 min in all on 2 cores). Run it on an otherwise idle machine: beside another CPU-heavy job the same fit can
 # land elsewhere (docs/troubleshooting.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -38,6 +38,7 @@ $R bench make-photos --res 192x256 --spp 256 --probe-spp 256 --insert-spp 1024 -
     --out bench/photos-val8-hr --n 8 --seed 400200
 run photos-val8-hr default
 run photos-val8-hr receivers --set shadow_receivers=true
+run photos-val8-hr seed1000 --set seed=1000
 $R bench make-photos --suite wide --res 192x256 --spp 256 --probe-spp 256 --insert-spp 1024 --quiet \
     --out bench/wide-val-hr --n 9 --seed 500200
 run wide-val-hr default
@@ -47,6 +48,7 @@ run wide-val-hr lr-receivers --set shadow_receivers=true
 echo "== wide-val-clean (96 x 128, 256 spp): receivers - default"; compare wide-val-clean lr-default lr-receivers
 echo "== wide-val-clean: the default with another seed - the default"; compare wide-val-clean lr-default lr-seed1000
 echo "== photos-val8-hr (192 x 256): receivers - default";        compare photos-val8-hr default receivers
+echo "== photos-val8-hr: the default with another seed - the default"; compare photos-val8-hr default seed1000
 echo "== wide-val-hr: fitted at 192 x 256 - at 96 x 128";          compare wide-val-hr lr-default default
 echo "== wide-val-hr (192 x 256): receivers - default";           compare wide-val-hr default receivers
 echo "== wide-val-hr (96 x 128): receivers - default";            compare wide-val-hr lr-default lr-receivers
