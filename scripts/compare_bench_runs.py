@@ -4,7 +4,9 @@ A synthetic benchmark (``roomlight bench run``) or a photo benchmark (``roomligh
 was run twice on the same scenes, e.g. without and with the white balance. The second run's
 methods are renamed ``<method><suffix>`` and each is paired with every method of the first run:
 ``METHOD+wb − baseline`` for each metric and material, as in the benchmark's own report (for a photo
-benchmark also the recovered materials and, per inserted object, the compositing scores).
+benchmark also the recovered materials and the compositing scores of the inserted objects, paired per object
+and per photo: a photo's objects share its fitted light, so only the second interval resamples independent
+draws).
 
 Run: .venv/bin/python scripts/compare_bench_runs.py BASE_RESULTS OTHER_RESULTS [--suffix +wb]
          [--method prior] [--view eval] [--out FILE.md]
@@ -67,13 +69,20 @@ def main(argv=None) -> None:
         md += ["## The recovered materials", "",
                paired_markdown(pm, method, ["objects"], {k: f"Δ {k}" for k in MATERIAL_METRICS}, note=False)]
     if base_ins and other_ins:
-        from roomlight.evaluation.photobench.report import INSERT_LABELS, insert_metrics
+        from roomlight.evaluation.photobench.report import INSERT_LABELS, insert_metrics, insertion_photo
 
         metrics = insert_metrics(base_ins + other_ins)
         pi = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(metrics),
                                 higher_is_better=metrics)
+        by_photo = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(metrics),
+                                      higher_is_better=metrics, cluster=insertion_photo)
+        labels = {k: f"Δ {INSERT_LABELS[k]}" for k in metrics}
         md += ["", "## The inserted objects (paired per object)", "",
-               paired_markdown(pi, method, ["objects"], {k: f"Δ {INSERT_LABELS[k]}" for k in metrics}, note=False)]
+               paired_markdown(pi, method, ["objects"], labels, note=False),
+               "", "## The inserted objects (paired per photo: its objects' differences averaged)", "",
+               "A photo's objects share its fitted light, so their differences are not independent; this interval "
+               "resamples photos.", "",
+               paired_markdown(by_photo, method, ["objects"], labels, note=False)]
     text = "\n".join(md)
     print(text)
     if args.out:

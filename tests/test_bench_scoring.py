@@ -159,6 +159,32 @@ def test_paired_differences_hand_computed(tmp_path):
     assert page.count("Cells: mean per-scene difference") == 1
 
 
+def test_paired_differences_by_cluster_average_within_each_group_first():
+    """Scenes grouped by ``cluster`` (objects of one photo): the mean, the interval, the wins and n are over
+    the groups' mean differences, computed here by hand, not over the scenes one by one."""
+    from roomlight.evaluation.harness.paired import bootstrap_mean_interval, paired_differences
+
+    scores = {  # scene: (a, b) object PSNR; photo p1 has two objects, p2 three, p3 one
+        "p1/o1": (20.0, 18.0), "p1/o2": (22.0, 21.0),
+        "p2/o1": (15.0, 16.0), "p2/o2": (14.0, 17.0), "p2/o3": (18.0, 18.0),
+        "p3/o1": (25.0, 19.0)}
+    records = [{"scene": sc, "material": "objects", "method": m, "metrics": {"insert": {"object_psnr_ldr": v}}}
+               for sc, (a, b) in scores.items() for m, v in (("a", a), ("b", b))]
+    records.append({"scene": "p3/o2", "material": "objects", "method": "a",  # unpaired: left out
+                    "metrics": {"insert": {"object_psnr_ldr": 40.0}}})
+    kw = dict(exclude=(), metrics=("object_psnr_ldr",), higher_is_better={"object_psnr_ldr": True})
+    per_object = paired_differences(records, "a", "insert", **kw)["b"]["objects"]["object_psnr_ldr"]
+    by_photo = paired_differences(records, "a", "insert", cluster=lambda scene: scene.split("/")[0],
+                                  **kw)["b"]["objects"]["object_psnr_ldr"]
+    photo_means = [(2.0 + 1.0) / 2, (-1.0 - 3.0 + 0.0) / 3, 6.0]
+    assert per_object["n"] == 6 and per_object["mean"] == pytest.approx(5.0 / 6)
+    assert by_photo["n"] == 3 and by_photo["wins"] == 2
+    assert by_photo["mean"] == pytest.approx(np.mean(photo_means))
+    assert by_photo["ci95"] == pytest.approx(list(bootstrap_mean_interval(photo_means)))
+    # without a cluster each scene is its own group: the per-object statistics
+    assert per_object["ci95"] == pytest.approx(list(bootstrap_mean_interval([2.0, 1.0, -1.0, -3.0, 0.0, 6.0])))
+
+
 def test_paired_tables_against_another_reference_method(tmp_path):
     """``reference``: any method's per-scene differences against the others, hand-computed; a
     method without finished cases is refused with the methods the results do have."""
@@ -269,5 +295,8 @@ def test_two_photo_runs_compared_object_by_object_for_insertion(tmp_path):
     # probes per photo: +2.0 and +0.5, mean +1.25
     assert "| prior | Δ PSNR LDR (dB, ↑) | +1.25 [" in md
     # inserted objects: +1, 0, +2, -1 over four objects, mean +0.50, two won
-    section = md.split("## The inserted objects")[1]
+    section = md.split("## The inserted objects (paired per object)")[1].split("## ")[0]
     assert "| prior | Δ region PSNR LDR ↑ | +0.50 [" in section and " 2/4" in section
+    # and per photo: p1 (+1 + 0) / 2 = +0.5, p2 (+2 - 1) / 2 = +0.5, both won
+    by_photo = md.split("## The inserted objects (paired per photo")[1]
+    assert "| prior | Δ region PSNR LDR ↑ | +0.50 [+0.50, +0.50] 2/2" in by_photo

@@ -590,6 +590,11 @@ def test_runner_resumes_shards_records_failures_and_the_report_pairs_methods(bui
     assert back["mean"] == pytest.approx(-stats["mean"]) and back["wins"] == 0
     assert flipped["paired"]["materials"]["prior"]["objects"]["albedo_rmse"]["mean"] == pytest.approx(0.05)
     ins = summary["insertion"]["paired"]["direct-envmap"]["objects"]["psnr_ldr"]["mean"]
+    # per photo: the photo's two objects are one draw, their mean difference the same as over the objects
+    per_object = summary["insertion"]["paired"]["direct-envmap"]["objects"]["psnr_ldr"]
+    by_photo = summary["insertion"]["paired_by_photo"]["direct-envmap"]["objects"]["psnr_ldr"]
+    assert (per_object["n"], by_photo["n"]) == (2, 1) and by_photo["mean"] == pytest.approx(ins)
+    assert "Paired per photo" in md
     assert flipped["insertion"]["paired"]["prior"]["objects"]["psnr_ldr"]["mean"] == pytest.approx(-ins)
     assert "## Paired differences on the probes: direct-envmap against each other method" in other["markdown"].read_text()
     with pytest.raises(RoomlightError, match="'veni-d' to pair the others with; the results have direct-envmap, oracle, prior"):

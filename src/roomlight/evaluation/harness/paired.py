@@ -43,7 +43,7 @@ def paired_title(method: str) -> str:
 
 
 def paired_differences(records: list[dict], method: str = "prior", view: str = "eval",
-                       exclude=("oracle",), metrics=METRICS, higher_is_better=None) -> dict:
+                       exclude=("oracle",), metrics=METRICS, higher_is_better=None, cluster=None) -> dict:
     """``{baseline: {material: {metric: stats}}}`` of ``method - baseline`` over shared scenes.
 
     ``records`` are benchmark results (``scene``, ``method``, ``material``, ``metrics[view]``).
@@ -53,6 +53,12 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
     better), ``n`` and ``better`` ("higher" or "lower": which sign of the difference is good).
     ``metrics`` and ``higher_is_better`` (``{metric: bool}``) name other scores than the
     benchmark's three (e.g. material errors).
+
+    ``cluster`` (a function of the scene name, e.g. the photo of ``"photo-00003/insert1"``) groups
+    scenes that are not independent: their differences are averaged within each group first, and the
+    mean, interval, wins and ``n`` are over the groups. Objects inserted into one photo share its fitted
+    light, so resampling them one by one would treat two or three draws of one error as independent and
+    give an interval narrower than the photos justify.
     """
     higher = HIGHER_IS_BETTER if higher_is_better is None else higher_is_better
     table: dict[tuple, dict] = {}
@@ -64,15 +70,16 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
     out: dict = {}
     for base in baselines:
         for metric in metrics:
-            per_material: dict[str, list[float]] = {}
+            per_material: dict[str, dict[str, list[float]]] = {}
             for (scene, material), by_method in sorted(table.items()):
                 if method not in by_method or base not in by_method:
                     continue
                 d = float(by_method[method][metric]) - float(by_method[base][metric])
                 if math.isfinite(d):
-                    per_material.setdefault(material, []).append(d)
-            for material, diffs in per_material.items():
-                a = np.asarray(diffs)
+                    group = scene if cluster is None else cluster(scene)
+                    per_material.setdefault(material, {}).setdefault(group, []).append(d)
+            for material, groups in per_material.items():
+                a = np.asarray([np.mean(g) for g in groups.values()])
                 good = a > 0 if higher[metric] else a < 0
                 lo, hi = bootstrap_mean_interval(a)
                 out.setdefault(base, {}).setdefault(material, {})[metric] = {

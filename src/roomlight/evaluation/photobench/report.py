@@ -340,6 +340,12 @@ def insertion_records(results: list[dict]) -> list[dict]:
     return out
 
 
+def insertion_photo(scene: str) -> str:
+    """The photo of an :func:`insertion_records` scene ("photo-00003/insert1" -> "photo-00003"): the group
+    whose objects share one fitted light, which paired statistics resample as one draw."""
+    return scene.split("/", 1)[0]
+
+
 def insert_metrics(records: list[dict]) -> dict[str, bool]:
     """The insertion scores every record has, in :data:`INSERT_METRICS` order."""
     have = set(INSERT_METRICS)
@@ -362,6 +368,8 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
     metrics = insert_metrics(records)
     paired = paired_differences(records, reference, "insert", exclude=(), metrics=tuple(metrics),
                                 higher_is_better=metrics)
+    paired_by_photo = paired_differences(records, reference, "insert", exclude=(), metrics=tuple(metrics),
+                                         higher_is_better=metrics, cluster=insertion_photo)
     # distance: per object, prior - prior-envmap region PSNR against the distance
     table: dict[str, dict] = {}
     for r in records:
@@ -383,7 +391,8 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
                     "slope_ci95": [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))],
                     "near": {"mean": float(near.mean()), "ci95": list(bootstrap_mean_interval(near)), "n": len(near)},
                     "far": {"mean": float(far.mean()), "ci95": list(bootstrap_mean_interval(far)), "n": len(far)}}
-    return {"methods": methods, "paired": paired, "distance": distance, "metrics": list(metrics)}
+    return {"methods": methods, "paired": paired, "paired_by_photo": paired_by_photo, "distance": distance,
+            "metrics": list(metrics)}
 
 
 def insertion_truths(results: list[dict]) -> str:
@@ -418,8 +427,13 @@ def _insertion_markdown(summary: dict | None, reference: str = "prior") -> list[
         cells = [f"{summary['methods'][m][k]['mean']:.3f} ± {summary['methods'][m][k]['std']:.3f}" if k in ("ssim", "rmse_hdr")
                  else f"{summary['methods'][m][k]['mean']:.2f} ± {summary['methods'][m][k]['std']:.2f}" for k in labels]
         md.append(f"| {m} | " + " | ".join(cells) + f" | {summary['methods'][m]['psnr_ldr']['n']} |")
-    md += ["", paired_markdown(summary["paired"], reference, ["objects"], {k: f"Δ {v}" for k, v in labels.items()},
-                               note=False)]
+    row_labels = {k: f"Δ {v}" for k, v in labels.items()}
+    md += [""] + (["Paired per object:", ""] if summary["paired"] else []) + [
+        paired_markdown(summary["paired"], reference, ["objects"], row_labels, note=False)]
+    if summary.get("paired_by_photo"):
+        md += ["", "Paired per photo (its objects' differences averaged: a photo's objects share its fitted light, so "
+               "only this interval resamples independent draws):", "",
+               paired_markdown(summary["paired_by_photo"], reference, ["objects"], row_labels, note=False)]
     d = summary.get("distance")
     if d:
         md += [f"**Does the 2.5D light's advantage grow with distance?** prior − prior-envmap region PSNR per object "
