@@ -69,14 +69,10 @@ def main(argv=None) -> None:
         md += ["## The recovered materials", "",
                paired_markdown(pm, method, ["objects"], {k: f"Δ {k}" for k in MATERIAL_METRICS}, note=False)]
     if base_ins and other_ins:
-        from roomlight.evaluation.photobench.report import INSERT_LABELS, insert_metrics, insertion_photo
+        from roomlight.evaluation.photobench.report import INSERT_LABELS, insert_metrics, paired_insertion
 
-        metrics = insert_metrics(base_ins + other_ins)
-        pi = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(metrics),
-                                higher_is_better=metrics)
-        by_photo = paired_differences(base_ins + other_ins, method, "insert", exclude=(), metrics=tuple(metrics),
-                                      higher_is_better=metrics, cluster=insertion_photo)
-        labels = {k: f"Δ {INSERT_LABELS[k]}" for k in metrics}
+        pi, by_photo = paired_insertion(base_ins + other_ins, method)
+        labels = {k: f"Δ {INSERT_LABELS[k]}" for k in insert_metrics(base_ins + other_ins)}
         md += ["", "## The inserted objects (paired per object)", "",
                paired_markdown(pi, method, ["objects"], labels, note=False),
                "", "## The inserted objects (paired per photo: its objects' differences averaged)", "",

@@ -17,13 +17,12 @@
 # land elsewhere (docs/troubleshooting.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-R=.venv/bin/roomlight
+source scripts/validation_photos.sh   # R, run_validation
 run() {  # SUITE NAME [--set FIELD=VALUE ...]
   local suite=$1 name=$2; shift 2
   local size=(--set render_size=256 --set geometry_size=512)
   if [[ $name == lr-* ]]; then size=(); fi
-  $R bench run-photos bench/$suite --out results/$suite-$name --preset fast --eval-spp 64 --methods prior \
-      --quiet "${size[@]}" "$@"
+  run_validation "$suite" "$name" "${size[@]}" "$@"
 }
 compare() {  # SUITE BASE OTHER
   .venv/bin/python scripts/compare_bench_runs.py results/$1-$2 results/$1-$3 --suffix +$3 --method prior

@@ -354,6 +354,16 @@ def insert_metrics(records: list[dict]) -> dict[str, bool]:
     return {k: v for k, v in INSERT_METRICS.items() if k in have}
 
 
+def paired_insertion(records: list[dict], method: str) -> tuple[dict, dict]:
+    """``method`` against every other method on the inserted objects' scores (:func:`insertion_records`),
+    as :func:`~roomlight.evaluation.harness.paired.paired_differences` gives them: paired per object, and per
+    photo (:func:`insertion_photo`: each photo's object differences averaged before resampling)."""
+    metrics = insert_metrics(records)
+    kw = dict(exclude=(), metrics=tuple(metrics), higher_is_better=metrics)
+    return (paired_differences(records, method, "insert", **kw),
+            paired_differences(records, method, "insert", cluster=insertion_photo, **kw))
+
+
 def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
     """Means per method, paired differences of ``reference`` against the others, and whether the 2.5D
     light's advantage over the prior at infinity grows with the object's distance from the camera."""
@@ -366,10 +376,7 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
     methods = {m: {k: {"mean": float(np.nanmean(v)), "std": float(np.nanstd(v)), "n": len(v)} for k, v in d.items()}
                for m, d in by.items()}
     metrics = insert_metrics(records)
-    paired = paired_differences(records, reference, "insert", exclude=(), metrics=tuple(metrics),
-                                higher_is_better=metrics)
-    paired_by_photo = paired_differences(records, reference, "insert", exclude=(), metrics=tuple(metrics),
-                                         higher_is_better=metrics, cluster=insertion_photo)
+    paired, paired_by_photo = paired_insertion(records, reference)
     # distance: per object, prior - prior-envmap region PSNR against the distance
     table: dict[str, dict] = {}
     for r in records:
