@@ -51,3 +51,6 @@ echo "== photos-val8-hr: the default with another seed - the default"; compare p
 echo "== wide-val-hr: fitted at 192 x 256 - at 96 x 128";          compare wide-val-hr lr-default default
 echo "== wide-val-hr (192 x 256): receivers - default";           compare wide-val-hr default receivers
 echo "== wide-val-hr (96 x 128): receivers - default";            compare wide-val-hr lr-default lr-receivers
+echo "== the light averaged over the two seeds' fits - its members"
+.venv/bin/python scripts/seed_ensemble.py results/wide-val-clean-lr-default results/wide-val-clean-lr-seed1000
+.venv/bin/python scripts/seed_ensemble.py results/photos-val8-hr-default results/photos-val8-hr-seed1000
