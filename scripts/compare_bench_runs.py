@@ -8,8 +8,12 @@ benchmark also the recovered materials and the compositing scores of the inserte
 and per photo: a photo's objects share its fitted light, so only the second interval resamples independent
 draws).
 
-Run: .venv/bin/python scripts/compare_bench_runs.py BASE_RESULTS OTHER_RESULTS [--suffix +wb]
-         [--method prior] [--view eval] [--out FILE.md]
+Either side may be several runs of the same setting with other fit seeds, joined by commas
+(``results/a,results/a-seed1000``): each score is then the mean over those runs (scenes that any of them
+lacks are left out), so the pairs compare what each setting gives on a scene, not one draw of it.
+
+Run: .venv/bin/python scripts/compare_bench_runs.py BASE_RESULTS[,BASE2...] OTHER_RESULTS[,OTHER2...]
+         [--suffix +wb] [--method prior] [--view eval] [--out FILE.md]
 """
 
 from __future__ import annotations
@@ -38,10 +42,28 @@ def _records(res: Path, suffix: str = "") -> tuple[list[dict], list[dict] | None
     return recs, None, None
 
 
+def _mean_records(spec: str, suffix: str = "") -> tuple[list[dict], list[dict] | None, list[dict] | None]:
+    """:func:`_records` of one results folder, or of several joined by commas averaged over them."""
+    from roomlight.evaluation.harness.paired import mean_over_runs
+
+    folders = [Path(p) for p in spec.split(",") if p]
+    for f in folders:
+        if not f.is_dir():
+            sys.exit(f"error: {f} is not a results folder")
+    runs = [_records(f, suffix) for f in folders]
+    if len(runs) == 1:
+        return runs[0]
+    merged = []
+    for part in range(3):
+        lists = [r[part] for r in runs]
+        merged.append(None if any(x is None for x in lists) else mean_over_runs(lists))
+    return tuple(merged)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("base", type=Path)
-    ap.add_argument("other", type=Path)
+    ap.add_argument("base", help="a results folder, or several (other seeds) joined by commas")
+    ap.add_argument("other", help="the same for the other setting")
     ap.add_argument("--suffix", default="+wb", help="appended to the second run's method names")
     ap.add_argument("--method", default="prior", help="the second run's method to compare (before the suffix)")
     ap.add_argument("--view", default="eval", help="synthetic benchmark view: eval (the probe) or input")
@@ -51,8 +73,8 @@ def main(argv=None) -> None:
     from roomlight.errors import RoomlightError
 
     try:
-        base, base_mat, base_ins = _records(args.base)
-        other, other_mat, other_ins = _records(args.other, args.suffix)
+        base, base_mat, base_ins = _mean_records(args.base)
+        other, other_mat, other_ins = _mean_records(args.other, args.suffix)
     except RoomlightError as exc:
         sys.exit(f"error: {exc}")
     method = args.method + args.suffix

@@ -300,3 +300,44 @@ def test_two_photo_runs_compared_object_by_object_for_insertion(tmp_path):
     # and per photo: p1 (+1 + 0) / 2 = +0.5, p2 (+2 - 1) / 2 = +0.5, both won
     by_photo = md.split("## The inserted objects (paired per photo")[1]
     assert "| prior | Δ region PSNR LDR ↑ | +0.50 [+0.50, +0.50] 2/2" in by_photo
+
+
+def test_repeated_runs_averaged_score_by_score():
+    """mean_over_runs: each (scene, method, material) score averaged over the runs; a scene any run lacks is
+    left out; a score one run lacks or holds as a non-number is not averaged."""
+    from roomlight.evaluation.harness.paired import mean_over_runs
+
+    def rec(scene, psnr, angle, extra=None):
+        return {"scene": scene, "method": "prior", "material": "diffuse", "note": scene,
+                "metrics": {"eval": {"psnr_ldr": psnr, "angular_error": angle, **(extra or {})}}}
+
+    one = [rec("p1", 20.0, 4.0, {"label": "x"}), rec("p2", 10.0, 8.0), rec("p3", 5.0, 1.0)]
+    two = [rec("p1", 23.0, 2.0, {"label": "y"}), rec("p2", 11.0, 6.0, {"only_here": 1.0})]
+    three = [rec("p1", 26.0, 3.0), rec("p2", 15.0, 7.0)]
+    merged = {r["scene"]: r for r in mean_over_runs([one, two, three])}
+    assert sorted(merged) == ["p1", "p2"]                      # p3 is in run one only
+    assert merged["p1"]["metrics"]["eval"] == {"psnr_ldr": 23.0, "angular_error": 3.0}
+    assert merged["p2"]["metrics"]["eval"] == {"psnr_ldr": 12.0, "angular_error": 7.0}
+    assert merged["p1"]["note"] == "p1"
+    assert mean_over_runs([one])[2]["metrics"]["eval"]["psnr_ldr"] == 5.0
+    with pytest.raises(ValueError):
+        mean_over_runs([])
+
+
+def test_compared_runs_averaged_over_seeds(tmp_path):
+    """compare_bench_runs.py A,A2 B,B2: each side's scores are the means over its runs before pairing."""
+    mod = _compare_script()
+    _fake_photo_run(tmp_path / "a", [("p1", "prior", 15.0, [20.0]), ("p2", "prior", 16.0, [18.0])])
+    _fake_photo_run(tmp_path / "a2", [("p1", "prior", 17.0, [22.0]), ("p2", "prior", 18.0, [18.0])])
+    _fake_photo_run(tmp_path / "b", [("p1", "prior", 17.0, [21.0]), ("p2", "prior", 16.5, [20.0])])
+    _fake_photo_run(tmp_path / "b2", [("p1", "prior", 19.0, [21.0]), ("p2", "prior", 17.5, [22.0])])
+    mod.main([f"{tmp_path / 'a'},{tmp_path / 'a2'}", f"{tmp_path / 'b'},{tmp_path / 'b2'}", "--suffix", "+x",
+              "--out", str(tmp_path / "cmp.md")])
+    md = (tmp_path / "cmp.md").read_text()
+    # probes: a means 16, 17; b means 18, 17; differences +2 and 0, mean +1.00, one won
+    assert "| prior | Δ PSNR LDR (dB, ↑) | +1.00 [+0.00, +2.00] 1/2" in md
+    # objects: a 21, 18; b 21, 21: differences 0 and +3
+    section = md.split("## The inserted objects (paired per object)")[1].split("## ")[0]
+    assert "| prior | Δ region PSNR LDR ↑ | +1.50 [+0.00, +3.00] 1/2" in section
+    with pytest.raises(SystemExit, match="not a results folder"):
+        mod.main([f"{tmp_path / 'a'},{tmp_path / 'none'}", str(tmp_path / "b")])

@@ -21,7 +21,8 @@ from roomlight.evaluation.harness.metrics import HIGHER_IS_BETTER, METRICS
 from roomlight.core.stats import RESAMPLES, VERDICT_MARKS, bootstrap_mean_interval, interval_verdict
 
 # bootstrap_mean_interval stays importable from here, where it was first defined.
-__all__ = ["bootstrap_mean_interval", "paired_differences", "paired_markdown", "paired_reference", "paired_title"]
+__all__ = ["bootstrap_mean_interval", "mean_over_runs", "paired_differences", "paired_markdown", "paired_reference",
+           "paired_title"]
 
 
 def paired_reference(records: list[dict], reference: str | None) -> str:
@@ -85,6 +86,38 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
                 out.setdefault(base, {}).setdefault(material, {})[metric] = {
                     "mean": float(a.mean()), "ci95": [lo, hi], "wins": int(good.sum()), "n": int(a.size),
                     "better": "higher" if higher[metric] else "lower"}
+    return out
+
+
+def mean_over_runs(runs: list[list[dict]]) -> list[dict]:
+    """The records of repeated runs (the same scenes and methods, another seed each) as one run whose
+    every score is the mean over the runs.
+
+    A fit's own random numbers move one scene's score by up to a decibel or more; pairing two methods on
+    their means over K seeds compares what each gives on that scene rather than one draw of it.
+    Records are matched by (scene, method, material); one missing from any run is left out, so every mean is
+    over the same K runs. Within each view (``metrics[view]``), a score is averaged where every run has it
+    as a number; the other fields are the first run's. ``runs`` of one list return copies of its records.
+    """
+    if not runs:
+        raise ValueError("mean_over_runs: no runs")
+
+    def key(r):
+        return r["scene"], r["method"], r["material"]
+
+    keyed = [{key(r): r for r in run} for run in runs]
+    out = []
+    for k, first in keyed[0].items():
+        group = [kr.get(k) for kr in keyed]
+        if any(g is None for g in group):
+            continue
+        metrics = {}
+        for view, scores in first.get("metrics", {}).items():
+            views = [g.get("metrics", {}).get(view) or {} for g in group]
+            metrics[view] = {name: float(np.mean([float(v[name]) for v in views])) for name, value in scores.items()
+                             if all(isinstance(v.get(name), (int, float)) and not isinstance(v.get(name), bool)
+                                    for v in views)}
+        out.append({**first, "metrics": metrics})
     return out
 
 
