@@ -3,8 +3,9 @@
 On a photo benchmark built with inserted objects (``roomlight bench make-photos``), every object is
 composited under each light and each variant of the pipeline, and scored three ways against its
 path-traced truth: the region (object and surroundings), the object's own pixels, and its shadow (the
-region without the object). Paired per object, each factor's effect is printed with a 95 % bootstrap
-interval, and every score's noise floor beside it:
+region without the object). Paired per object and again per photo (a photo's objects share its fitted
+light, so only the second resamples independent draws), each factor's effect is printed with a 95 %
+bootstrap interval, and every score's noise floor beside it:
 
 - the truth: the suite's clean insertion truth where it has one (``make-photos --insert-spp``), else the
   render with the photo's own samples;
@@ -359,11 +360,21 @@ def diagnose_photo(case_dir: Path, results: list[Path], spp: int, hi_spp: int, q
     return out
 
 
-def paired(records: list[dict], a: str, b: str, key: str, reps: int = 2000, seed: int = 0):
-    """Mean of a - b over the objects both score, 95 % bootstrap interval, wins, count."""
+def paired(records: list[dict], a: str, b: str, key: str, reps: int = 2000, seed: int = 0, by_photo: bool = False):
+    """Mean of a - b over the objects both score, 95 % bootstrap interval, wins, count.
+
+    ``by_photo``: each photo's objects' differences averaged first, and the interval, wins and count over
+    photos (a photo's objects share its fitted light: they are not independent draws)."""
     ka = {(r["photo"], r["id"]): r[key] for r in records if r["variant"] == a}
     kb = {(r["photo"], r["id"]): r[key] for r in records if r["variant"] == b}
-    d = np.array([ka[k] - kb[k] for k in ka if k in kb and math.isfinite(ka[k]) and math.isfinite(kb[k])])
+    shared = [k for k in ka if k in kb and math.isfinite(ka[k]) and math.isfinite(kb[k])]
+    if by_photo:
+        groups: dict[str, list[float]] = {}
+        for k in shared:
+            groups.setdefault(k[0], []).append(ka[k] - kb[k])
+        d = np.array([np.mean(g) for g in groups.values()])
+    else:
+        d = np.array([ka[k] - kb[k] for k in shared])
     if not len(d):
         return None
     rng = np.random.default_rng(seed)
@@ -399,12 +410,16 @@ def table(records: list[dict]) -> str:
               if v.endswith(" true depth") and v[:-len(" true depth")] + " at infinity" in variants]
     pairs += [(v, v[:-len(" true radiance")]) for v in variants if v.endswith(" true radiance")]
     pairs = [p for p in pairs if all(any(r["variant"] == x for r in records) for x in p)]
-    for a, b in pairs:
-        cells = []
-        for key in SCORES:
-            p = paired(records, a, b, key)
-            cells.append("–" if p is None else f"{p[0]:+.2f} [{p[1]:+.2f}, {p[2]:+.2f}] {p[3]}/{p[4]}")
-        lines.append(f"| {a} − {b} | " + " | ".join(cells) + " |")
+    for by_photo in (False, True):
+        if by_photo:
+            lines += ["", "| paired per photo (a − b, each photo's objects averaged) | region | object | shadow |",
+                      "|---|:---:|:---:|:---:|"]
+        for a, b in pairs:
+            cells = []
+            for key in SCORES:
+                p = paired(records, a, b, key, by_photo=by_photo)
+                cells.append("–" if p is None else f"{p[0]:+.2f} [{p[1]:+.2f}, {p[2]:+.2f}] {p[3]}/{p[4]}")
+            lines.append(f"| {a} − {b} | " + " | ".join(cells) + " |")
     # against distance: the lights as the pipeline uses them, not the diagnostic variants
     plain = [p for p in pairs if all(x not in p[0] + p[1] for x in ("unenclosed", "true albedo", "true geometry"))
              and ("true level" in p[0]) == ("true level" in p[1])
@@ -446,6 +461,9 @@ def distance_table(records: list[dict], pairs, reps: int = 2000) -> str:
                 else:
                     cells.append("–")
             x, y = dist[ok], diff[ok]
+            if len(x) < 3 or np.ptp(x) == 0:        # no spread of distances: no slope to fit
+                lines.append(f"| {a} − {b} | {key} | " + " | ".join(cells) + " | – |")
+                continue
             slope = float(np.polyfit(x, y, 1)[0])
             rng = np.random.default_rng(0)
             boots = []

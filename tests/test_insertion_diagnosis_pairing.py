@@ -1,0 +1,59 @@
+"""benchmarks/insertion_diagnosis.py's paired statistics: per object, and per photo with each photo's
+objects' differences averaged first (hand-computed values)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "insertion_diagnosis.py"
+
+
+def _module():
+    spec = importlib.util.spec_from_file_location("insertion_diagnosis", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _records():
+    """Photo p1: two objects, oracle − oracle-envmap +3 and +1 on objects; photo p2: one object, −1;
+    photo p3: one object, +2 (and a non-finite shadow score, left out)."""
+    rows = [("p1", "insert1", 3.0), ("p1", "insert2", 1.0), ("p2", "insert1", -1.0), ("p3", "insert1", 2.0)]
+    out = []
+    for k, (photo, oid, diff) in enumerate(rows):
+        for variant, value in (("oracle", 20.0 + diff), ("oracle-envmap", 20.0)):
+            out.append({"photo": photo, "id": oid, "variant": variant, "distance_m": 1.0 + k,
+                        "psnr_ldr": value, "object_psnr_ldr": value,
+                        "shadow_psnr_ldr": float("nan") if photo == "p3" else value})
+    return out
+
+
+def test_paired_per_object_and_per_photo():
+    mod = _module()
+    recs = _records()
+    mean, lo, hi, wins, n = mod.paired(recs, "oracle", "oracle-envmap", "object_psnr_ldr")
+    assert (mean, wins, n) == (pytest.approx(1.25), 3, 4)            # (3 + 1 − 1 + 2) / 4
+    mean, lo, hi, wins, n = mod.paired(recs, "oracle", "oracle-envmap", "object_psnr_ldr", by_photo=True)
+    assert (mean, wins, n) == (pytest.approx(1.0), 2, 3)             # photos: 2, −1, 2
+    assert -1.0 <= lo <= 1.0 <= hi <= 2.0
+    # a photo whose only object has a non-finite score drops out of the per-photo pairing
+    assert mod.paired(recs, "oracle", "oracle-envmap", "shadow_psnr_ldr", by_photo=True)[4] == 2
+    # the bootstrap of the photo means, done by hand
+    d = np.array([2.0, -1.0, 2.0])
+    boots = d[np.random.default_rng(0).integers(0, 3, (2000, 3))].mean(1)
+    assert (lo, hi) == (pytest.approx(np.percentile(boots, 2.5)), pytest.approx(np.percentile(boots, 97.5)))
+
+
+def test_the_table_prints_both_pairings():
+    mod = _module()
+    text = mod.table(_records())
+    assert "| oracle − oracle-envmap | +1.25 [" in text
+    per_photo = text.split("paired per photo")[1]
+    assert "| oracle − oracle-envmap | +1.00 [" in per_photo and " 2/3 |" in per_photo
+    # objects all at one distance: no slope to fit, the row says so instead of failing
+    same = [{**r, "distance_m": 2.0} for r in _records()]
+    assert "| – |" in mod.distance_table(same, [("oracle", "oracle-envmap")])
