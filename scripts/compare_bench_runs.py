@@ -50,6 +50,8 @@ def _mean_records(spec: str, suffix: str = "") -> tuple[list[dict], list[dict] |
     for f in folders:
         if not f.is_dir():
             sys.exit(f"error: {f} is not a results folder")
+    if len({f.resolve() for f in folders}) < len(folders):
+        sys.exit(f"error: {spec}: a run is given twice")
     runs = [_records(f, suffix) for f in folders]
     if len(runs) == 1:
         return runs[0]

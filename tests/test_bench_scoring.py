@@ -304,20 +304,23 @@ def test_two_photo_runs_compared_object_by_object_for_insertion(tmp_path):
 
 def test_repeated_runs_averaged_score_by_score():
     """mean_over_runs: each (scene, method, material) score averaged over the runs; a scene any run lacks is
-    left out; a score one run lacks or holds as a non-number is not averaged."""
+    left out; a score another run lacks is nan (not a mean over fewer runs); non-numbers are dropped."""
     from roomlight.evaluation.harness.paired import mean_over_runs
 
     def rec(scene, psnr, angle, extra=None):
         return {"scene": scene, "method": "prior", "material": "diffuse", "note": scene,
                 "metrics": {"eval": {"psnr_ldr": psnr, "angular_error": angle, **(extra or {})}}}
 
-    one = [rec("p1", 20.0, 4.0, {"label": "x"}), rec("p2", 10.0, 8.0), rec("p3", 5.0, 1.0)]
+    one = [rec("p1", 20.0, 4.0, {"label": "x", "flag": True}), rec("p2", 10.0, 8.0, {"rmse_hdr": 0.2}),
+           rec("p3", 5.0, 1.0)]
     two = [rec("p1", 23.0, 2.0, {"label": "y"}), rec("p2", 11.0, 6.0, {"only_here": 1.0})]
     three = [rec("p1", 26.0, 3.0), rec("p2", 15.0, 7.0)]
     merged = {r["scene"]: r for r in mean_over_runs([one, two, three])}
     assert sorted(merged) == ["p1", "p2"]                      # p3 is in run one only
     assert merged["p1"]["metrics"]["eval"] == {"psnr_ldr": 23.0, "angular_error": 3.0}
-    assert merged["p2"]["metrics"]["eval"] == {"psnr_ldr": 12.0, "angular_error": 7.0}
+    p2 = merged["p2"]["metrics"]["eval"]
+    assert (p2["psnr_ldr"], p2["angular_error"]) == (12.0, 7.0) and math.isnan(p2["rmse_hdr"])
+    assert "only_here" not in p2                               # the first run's scores decide which are kept
     assert merged["p1"]["note"] == "p1"
     assert mean_over_runs([one])[2]["metrics"]["eval"]["psnr_ldr"] == 5.0
     with pytest.raises(ValueError):
@@ -341,3 +344,23 @@ def test_compared_runs_averaged_over_seeds(tmp_path):
     assert "| prior | Δ region PSNR LDR ↑ | +1.50 [+0.00, +3.00] 1/2" in section
     with pytest.raises(SystemExit, match="not a results folder"):
         mod.main([f"{tmp_path / 'a'},{tmp_path / 'none'}", str(tmp_path / "b")])
+    with pytest.raises(SystemExit, match="given twice"):
+        mod.main([f"{tmp_path / 'a'},{tmp_path / 'a'}", str(tmp_path / "b")])
+
+
+def test_slope_and_its_bootstrap_interval():
+    """bootstrap_slope_interval: exact on a line (every resample with two distinct x has the same slope), the
+    least-squares slope of noisy points inside its interval, nan without two distinct x."""
+    from roomlight.core.stats import bootstrap_slope_interval
+
+    x = np.array([1.0, 2.0, 3.0, 5.0, 8.0])
+    slope, lo, hi = bootstrap_slope_interval(x, 2.0 * x + 1.0)
+    assert (slope, lo, hi) == (pytest.approx(2.0), pytest.approx(2.0), pytest.approx(2.0))
+    rng = np.random.default_rng(1)
+    xs = rng.uniform(0, 4, 40)
+    ys = -0.5 * xs + rng.normal(0, 0.3, 40)
+    slope, lo, hi = bootstrap_slope_interval(xs, ys)
+    # the closed-form least-squares slope, computed apart
+    ref = float(((xs - xs.mean()) * (ys - ys.mean())).sum() / ((xs - xs.mean()) ** 2).sum())
+    assert slope == pytest.approx(ref) and lo < ref < hi and hi - lo < 0.5
+    assert all(math.isnan(v) for v in bootstrap_slope_interval([2.0, 2.0, 2.0], [1.0, 2.0, 3.0]))

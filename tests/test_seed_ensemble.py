@@ -1,5 +1,5 @@
-"""scripts/seed_ensemble.py: the light averaged over several fits, on hand-made runs whose probe renders are
-known multiples of their truth (the mean light's render is then a known multiple too)."""
+"""scripts/seed_ensemble.py: several fits' probe predictions averaged, on hand-made runs whose probe renders are
+known multiples of their truth (their average is then a known multiple too)."""
 
 from __future__ import annotations
 
@@ -53,7 +53,7 @@ def runs(tmp_path, monkeypatch):
     return tmp_path, truths
 
 
-def test_the_mean_light_scores_the_averaged_render(runs):
+def test_the_average_scores_the_averaged_render(runs):
     root, truths = runs
     script = load_script("seed_ensemble")
     scores = script.ensemble_scores([root / "one", root / "two"], "prior")
@@ -62,11 +62,25 @@ def test_the_mean_light_scores_the_averaged_render(runs):
     inside, gt = truth.window_mask > 0, truth.probe_images["matte"]
     a = scores["photo-a"]["matte"]
     # 0.5 and 1.0 of the truth average to 0.75 of it
-    assert a["mean_light"]["psnr_ldr"] == pytest.approx(_psnr_ldr(0.75 * gt, gt, inside), rel=1e-5)
+    assert a["average"]["psnr_ldr"] == pytest.approx(_psnr_ldr(0.75 * gt, gt, inside), rel=1e-5)
     assert a["members"][0]["psnr_ldr"] == pytest.approx(_psnr_ldr(0.5 * gt, gt, inside), rel=1e-5)
     assert math.isinf(a["members"][1]["psnr_ldr"])           # run two renders photo a's truth itself
     # a scaled light keeps every pixel's colour: no angular error, members and mean alike
-    assert a["mean_light"]["angular_error"] == pytest.approx(0.0, abs=1e-3)
+    assert a["average"]["angular_error"] == pytest.approx(0.0, abs=1e-3)
+    # photo a's infinite member leaves it out of the paired difference: photo b alone, whose members agree
+    summ = script.summary(scores)["matte"]["psnr_ldr"]
+    assert summ["n"] == 1 and summ["mean"] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_runs_of_other_photographs_or_one_run_twice_are_refused(runs):
+    root, _ = runs
+    script = load_script("seed_ensemble")
+    with pytest.raises(SystemExit, match="given twice"):
+        script.ensemble_scores([root / "one", root / "one"], "prior")
+    record = root / "two" / "cases" / "photo-b" / "prior" / "result.json"
+    record.write_text(json.dumps({"case_dir": str(root / "bench" / "photo-a")}))
+    with pytest.raises(SystemExit, match="photo-b: the runs fitted different photographs"):
+        script.ensemble_scores([root / "one", root / "two"], "prior")
 
 
 def test_equal_members_gain_nothing_and_the_summary_pairs_per_photo(runs, capsys, tmp_path):
@@ -74,12 +88,12 @@ def test_equal_members_gain_nothing_and_the_summary_pairs_per_photo(runs, capsys
     script = load_script("seed_ensemble")
     truth = truths[str(root / "bench" / "photo-a")]
     inside, gt = truth.window_mask > 0, truth.probe_images["diffuse"]
-    # photo a's second member 1.3 of the truth instead of the truth itself: the mean light is 0.9 of it
+    # photo a's second member 1.3 of the truth instead of the truth itself: their average is 0.9 of it
     for m in MATERIALS:
         _write_rgb(root / "two" / "cases" / "photo-a" / "prior" / f"probes_{m}.exr", 1.3 * truth.probe_images[m])
     scores = script.ensemble_scores([root / "one", root / "two"], "prior")
     b = scores["photo-b"]["diffuse"]
-    assert b["mean_light"]["psnr_ldr"] == pytest.approx(b["members"][0]["psnr_ldr"], rel=1e-6)   # 0.4 and 0.4
+    assert b["average"]["psnr_ldr"] == pytest.approx(b["members"][0]["psnr_ldr"], rel=1e-6)   # 0.4 and 0.4
     gain_a = _psnr_ldr(0.9 * gt, gt, inside) - 0.5 * (_psnr_ldr(0.5 * gt, gt, inside) + _psnr_ldr(1.3 * gt, gt, inside))
     assert gain_a > 0
     summ = script.summary(scores)["diffuse"]["psnr_ldr"]
@@ -88,7 +102,7 @@ def test_equal_members_gain_nothing_and_the_summary_pairs_per_photo(runs, capsys
     assert summ["ci95"][0] == pytest.approx(0.0, abs=1e-6) and summ["ci95"][1] == pytest.approx(gain_a, rel=1e-4)
     script.main([str(root / "one"), str(root / "two"), "--json", str(tmp_path / "e.json")])
     out = capsys.readouterr().out
-    assert "2 photos, method prior, the light averaged over 2 fits" in out
+    assert "2 photos, method prior, the probes averaged over 2 fits" in out
     assert "| diffuse | psnr_ldr |" in out
     assert json.loads((tmp_path / "e.json").read_text())["summary"]["diffuse"]["psnr_ldr"]["n"] == 2
     with pytest.raises(SystemExit):

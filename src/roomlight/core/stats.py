@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["RESAMPLES", "VERDICT_MARKS", "bootstrap_mean_interval", "interval_verdict"]
+__all__ = ["RESAMPLES", "VERDICT_MARKS", "bootstrap_mean_interval", "bootstrap_slope_interval", "interval_verdict"]
 
 #: Number of bootstrap resamples (the interval's Monte Carlo error is ~0.5 % of its width).
 RESAMPLES = 10000
@@ -32,6 +32,31 @@ def bootstrap_mean_interval(values, level: float = 0.95, resamples: int = RESAMP
     means = a[rng.integers(0, a.size, size=(resamples, a.size))].mean(axis=1)
     lo, hi = np.quantile(means, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
     return float(lo), float(hi)
+
+
+def bootstrap_slope_interval(x, y, level: float = 0.95, resamples: int = 2000,
+                             seed: int = 0) -> tuple[float, float, float]:
+    """Least-squares slope of ``y`` over ``x`` (1-D, finite, same length) and its percentile-bootstrap interval:
+    (slope, lo, hi), in units of y per unit of x.
+
+    Pairs (x, y) are resampled with replacement; a resample whose x are all equal has no slope and is
+    skipped. Without two distinct x the slope is nan, and so is the interval when no resample has one.
+    """
+    x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
+    if x.size < 2 or np.ptp(x) == 0:
+        return float("nan"), float("nan"), float("nan")
+    slope = float(np.polyfit(x, y, 1)[0])
+    rng = np.random.default_rng(seed)
+    boots = []
+    for _ in range(resamples):
+        i = rng.integers(0, x.size, x.size)
+        if np.ptp(x[i]) > 0:
+            boots.append(np.polyfit(x[i], y[i], 1)[0])
+    if not boots:
+        return slope, float("nan"), float("nan")
+    # rounded so that level 0.95 asks for exactly the 2.5th and 97.5th percentiles
+    lo, hi = np.percentile(boots, [round(50.0 * (1.0 - level), 10), round(50.0 * (1.0 + level), 10)])
+    return slope, float(lo), float(hi)
 
 
 #: How tables mark a :func:`interval_verdict`.

@@ -89,15 +89,21 @@ def paired_differences(records: list[dict], method: str = "prior", view: str = "
     return out
 
 
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 def mean_over_runs(runs: list[list[dict]]) -> list[dict]:
     """The records of repeated runs (the same scenes and methods, another seed each) as one run whose
     every score is the mean over the runs.
 
-    A fit's own random numbers move one scene's score by up to a decibel or more; pairing two methods on
-    their means over K seeds compares what each gives on that scene rather than one draw of it.
+    A photo fit's own random numbers move one photo's score by up to 1.6 dB; pairing two methods on their
+    means over K seeds compares what each gives on that scene rather than one draw of it.
     Records are matched by (scene, method, material); one missing from any run is left out, so every mean is
-    over the same K runs. Within each view (``metrics[view]``), a score is averaged where every run has it
-    as a number; the other fields are the first run's. ``runs`` of one list return copies of its records.
+    over the same K runs. Within each view (``metrics[view]``), every number of the first run's record is
+    averaged; one that another run lacks becomes nan (and :func:`paired_differences` leaves that scene out of
+    that score), so no mean is over fewer runs than the others. Non-numbers are dropped; the other fields
+    are the first run's. ``runs`` of one list return copies of its records.
     """
     if not runs:
         raise ValueError("mean_over_runs: no runs")
@@ -114,9 +120,9 @@ def mean_over_runs(runs: list[list[dict]]) -> list[dict]:
         metrics = {}
         for view, scores in first.get("metrics", {}).items():
             views = [g.get("metrics", {}).get(view) or {} for g in group]
-            metrics[view] = {name: float(np.mean([float(v[name]) for v in views])) for name, value in scores.items()
-                             if all(isinstance(v.get(name), (int, float)) and not isinstance(v.get(name), bool)
-                                    for v in views)}
+            metrics[view] = {name: float(np.mean([float(v[name]) for v in views]))
+                             if all(_is_number(v.get(name)) for v in views) else math.nan
+                             for name, value in scores.items() if _is_number(value)}
         out.append({**first, "metrics": metrics})
     return out
 

@@ -367,7 +367,7 @@ def paired_insertion(records: list[dict], method: str) -> tuple[dict, dict]:
 def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
     """Means per method, paired differences of ``reference`` against the others, and whether the 2.5D
     light's advantage over the prior at infinity grows with the object's distance from the camera."""
-    from roomlight.core.stats import bootstrap_mean_interval
+    from roomlight.core.stats import bootstrap_mean_interval, bootstrap_slope_interval
 
     by: dict[str, dict[str, list[float]]] = {}
     for r in records:
@@ -387,15 +387,8 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
         d, diff = np.asarray(pairs).T
         med = float(np.median(d))
         near, far = diff[d <= med], diff[d > med]
-        slope = float(np.polyfit(d, diff, 1)[0]) if np.ptp(d) > 0 else float("nan")
-        rng = np.random.default_rng(0)
-        boots = []
-        for _ in range(2000):
-            i = rng.integers(0, len(d), len(d))
-            if np.ptp(d[i]) > 0:
-                boots.append(np.polyfit(d[i], diff[i], 1)[0])
-        distance = {"n": len(pairs), "median_m": med, "slope_db_per_m": slope,
-                    "slope_ci95": [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))],
+        slope, lo, hi = bootstrap_slope_interval(d, diff)
+        distance = {"n": len(pairs), "median_m": med, "slope_db_per_m": slope, "slope_ci95": [lo, hi],
                     "near": {"mean": float(near.mean()), "ci95": list(bootstrap_mean_interval(near)), "n": len(near)},
                     "far": {"mean": float(far.mean()), "ci95": list(bootstrap_mean_interval(far)), "n": len(far)}}
     return {"methods": methods, "paired": paired, "paired_by_photo": paired_by_photo, "distance": distance,
