@@ -82,9 +82,7 @@ def summary(scores: dict) -> dict:
     average = [record(p, m, "average", scores[p][m]["average"]) for p in scores for m in MATERIALS]
     members = mean_over_runs([[record(p, m, "members", scores[p][m]["members"][k]) for p in scores for m in MATERIALS]
                               for k in range(runs)])
-    higher = {"psnr_ldr": True, "angular_error": False}
-    paired = paired_differences(average + members, "average", "eval", exclude=(), metrics=SCORES,
-                                higher_is_better=higher)["members"]
+    paired = paired_differences(average + members, "average", "eval", exclude=(), metrics=SCORES)["members"]
     out = {}
     for m in MATERIALS:
         out[m] = {}
