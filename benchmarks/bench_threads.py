@@ -5,19 +5,19 @@ built-in example room (``--steps`` Adam steps of decoder forward + backward), in
 per measurement so that OpenMP's settings take effect:
 
 - ``before``: torch's defaults (as many threads as the machine has, OpenMP's spinning wait);
-- ``passive``: torch's thread count, but OpenMP threads that sleep when idle;
-- ``after``: roomlight's policy (``roomlight.cli.threads``: passive waiting, threads from the
-  CPUs available less the busy ones).
+- ``default``: roomlight's default (:mod:`roomlight.cli.threads`): the CPUs this process may use,
+  OpenMP threads that sleep when idle if other processes keep a CPU busy when it starts;
+- ``auto``: ``--threads auto``: the same waiting, and the CPUs less the busy ones.
 
 "Under load" runs the same while ``--busy`` other processes spin on the CPU (a pure-Python loop
 each, like any other job). Times are the median of ``--repeats`` runs, in seconds for the fit
 alone (process start and model loading excluded).
 
 "Load arriving later" runs ``--phases`` fits in one process that chose its threads on an idle
-machine; the busy processes start after the first phase. ``start only`` keeps the choice made at the
-start; ``re-checked`` measures the load again before each phase
-(:func:`roomlight.core.render.variant.recheck_threads`, as the long commands do between their cases and
-validations). Its times are the median over the phases after the load arrived.
+machine; the busy processes start after the first phase. ``default`` keeps its count and its waiting;
+``auto`` measures the load again before each phase (:func:`roomlight.core.render.variant.recheck_threads`,
+as the long commands do between their cases and validations). Its times are the median over the
+phases after the load arrived.
 
 Run: .venv/bin/python benchmarks/bench_threads.py [--steps 100] [--repeats 3] [--busy 1] [--phases 5]
 """
@@ -52,12 +52,12 @@ fit_latent(model, rad, dep, LatentFitConfig(steps=2))  # warm-up
 
 CHILD = r"""
 import json, os, sys, time
-if os.environ.get("BENCH_POLICY") == "passive":
-    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
-if os.environ.get("BENCH_POLICY") == "after":
-    from roomlight.cli.threads import apply_thread_policy, measured_threads, prepare_environment
+if os.environ.get("BENCH_POLICY") in ("default", "auto"):
+    from roomlight.cli.threads import apply_thread_policy, default_threads, prepare_environment
     prepare_environment()
-    os.environ["ROOMLIGHT_THREADS"] = str(measured_threads())
+    if os.environ["BENCH_POLICY"] == "auto":
+        os.environ["ROOMLIGHT_THREADS"] = "auto"
+    default_threads()
     apply_thread_policy()
 """ + LOAD_AND_WARM_UP + r"""
 t = time.perf_counter()
@@ -68,18 +68,18 @@ print(json.dumps({"seconds": time.perf_counter() - t, "threads": torch.get_num_t
 
 PHASES_CHILD = r"""
 import json, os, sys, time
-from roomlight.cli.threads import apply_thread_policy, measured_threads, prepare_environment
+from roomlight.cli.threads import apply_thread_policy, default_threads, prepare_environment
 prepare_environment()
-os.environ["ROOMLIGHT_THREADS"] = str(measured_threads())
-if os.environ.get("BENCH_POLICY") == "recheck":
-    os.environ["ROOMLIGHT_THREADS_AUTO"] = "1"
+if os.environ.get("BENCH_POLICY") == "auto":
+    os.environ["ROOMLIGHT_THREADS"] = "auto"
+default_threads()
 apply_thread_policy()
 """ + LOAD_AND_WARM_UP + r"""
 from roomlight.core.render.variant import recheck_threads
 for phase in range(int(sys.argv[2])):
     if phase:
         time.sleep(0.5)  # the parent starts the busy processes after the first phase
-    recheck_threads()  # does nothing unless the policy is 'recheck'
+    recheck_threads()  # does nothing unless the policy is 'auto'
     t = time.perf_counter()
     fit_latent(model, rad, dep, LatentFitConfig(steps=int(sys.argv[1])))
     print(json.dumps({"phase": phase, "seconds": time.perf_counter() - t, "threads": torch.get_num_threads()}),
@@ -159,37 +159,38 @@ def main() -> None:
             time.sleep(0.5)
         try:
             before = measure("before", args.steps, args.repeats)
-            passive = measure("passive", args.steps, args.repeats)
-            after = measure("after", args.steps, args.repeats)
+            default = measure("default", args.steps, args.repeats)
+            auto = measure("auto", args.steps, args.repeats)
         finally:
             stop.set()
             for p in spinners:
                 p.join()
-        rows.append((load, before, passive, after))
+        rows.append((load, before, default, auto))
 
     print(f"Latent fit of the bundled prior, {args.steps} steps; median of {args.repeats}; "
           f"{os.cpu_count()} CPUs, load average before the run {load_before:.2f}\n")
-    print("| machine | before: torch defaults | passive waiting only | after: roomlight's policy | speed-up |")
-    print("|---|---:|---:|---:|---:|")
+    print("| machine | torch defaults | roomlight's default | `--threads auto` | default's speed-up | auto's |")
+    print("|---|---:|---:|---:|---:|---:|")
     for load, *cols in rows:
         label = load if load == "as found" else f"{load} (+{args.busy} busy process{'es' if args.busy > 1 else ''})"
         cells = " | ".join(f"{c['seconds']:.2f} s ({c['threads']} thr., {c['wait'].lower()})" for c in cols)
-        print(f"| {label} | {cells} | {cols[0]['seconds'] / cols[-1]['seconds']:.1f}× |")
+        print(f"| {label} | {cells} | {cols[0]['seconds'] / cols[1]['seconds']:.1f}× | "
+              f"{cols[0]['seconds'] / cols[2]['seconds']:.1f}× |")
 
     late = {policy: [run_phases(policy, args.steps, args.phases, args.busy) for _ in range(args.repeats)]
-            for policy in ("start", "recheck")}
+            for policy in ("default", "auto")}
     print(f"\nLoad arriving later: {args.phases} fits of {args.steps} steps in one process, +{args.busy} busy "
           f"process(es) from the second on; medians of {args.repeats} processes\n")
     print("| threads chosen | first fit (idle) | fits after the load arrived | threads |")
     print("|---|---:|---:|---|")
-    for policy, label in (("start", "at the start only"), ("recheck", "re-checked before each fit")):
+    for policy, label in (("default", "default: fixed at the start"), ("auto", "auto: re-checked before each fit")):
         runs = late[policy]
         first = statistics.median(r["first"] for r in runs)
         later = statistics.median(r["seconds"] for r in runs)
         print(f"| {label} | {first:.2f} s | {later:.2f} s | {runs[-1]['threads']} |")
-    ratio = statistics.median(r["seconds"] for r in late["start"]) / statistics.median(
-        r["seconds"] for r in late["recheck"])
-    print(f"\nre-checking: {ratio:.1f}x faster once the load arrived")
+    ratio = statistics.median(r["seconds"] for r in late["default"]) / statistics.median(
+        r["seconds"] for r in late["auto"])
+    print(f"\nauto's re-checking: {ratio:.1f}x faster once the load arrived")
 
 
 if __name__ == "__main__":

@@ -12,10 +12,29 @@ from roomlight import __version__  # noqa: E402
 from roomlight.cli.common import RoomlightGroup  # noqa: E402
 
 
+class ThreadCount(click.ParamType):
+    """A positive whole number of threads, or ``auto`` (follow the machine's load)."""
+
+    name = "threads"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, int) or str(value).strip().lower() == "auto":
+            return value if isinstance(value, int) else "auto"
+        try:
+            n = int(str(value).strip())
+        except ValueError:
+            self.fail(f"{value!r} is neither a positive whole number nor 'auto'", param, ctx)
+        if n < 1:
+            self.fail(f"{n} is not a positive number of threads", param, ctx)
+        return n
+
+
 @click.group(cls=RoomlightGroup, context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.version_option(__version__, prog_name="roomlight")
-@click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
-              help="Threads for torch and Mitsuba [default: $ROOMLIGHT_THREADS, else the CPUs available].")
+@click.option("--threads", type=ThreadCount(), default=None, metavar="N|auto",
+              help="Threads for torch and Mitsuba [default: $ROOMLIGHT_THREADS, else the CPUs available]. "
+                   "'auto': the CPUs other processes leave free, measured again between long phases "
+                   "(faster beside other jobs, but the numbers then depend on them).")
 @click.option("--deterministic", is_flag=True,
               help="Bit-identical results run to run: Mitsuba's CPU backend on one thread (slower; "
                    "docs/troubleshooting.md). Also $ROOMLIGHT_DETERMINISTIC=1.")

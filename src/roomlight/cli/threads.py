@@ -11,9 +11,12 @@ The policy, applied once when ``roomlight`` starts:
   at least half a CPU busy: idle threads sleep at once. On an idle machine OpenMP keeps its short spin,
   which is faster there. Set before torch is imported, unless the user already set it;
 - threads: ``--threads N``, else ``$ROOMLIGHT_THREADS``, else the CPUs this process may use
-  (``os.sched_getaffinity``) less those other processes keep busy, measured over 50 ms when the
-  program starts (``/proc/stat``), at least one; for torch and for Dr.Jit alike. A thread more
-  than the free cores makes every parallel region wait for the one that is descheduled.
+  (``os.sched_getaffinity``), for torch and for Dr.Jit alike. The count never follows the load by
+  default: torch splits its float reductions by thread, so a count taken from the load would make the
+  same command give other numbers beside another job. ``--threads auto`` (``ROOMLIGHT_THREADS=auto``)
+  asks for that trade: the CPUs less those other processes keep busy, measured over 50 ms when the
+  program starts (``/proc/stat``) and again between a long command's phases, at least one; faster
+  beside other work where torch dominates, repeatable only on a machine in the same state.
 
 ``benchmarks/bench_threads.py`` measures the policy against torch's defaults, idle and next to a
 busy process (README, Troubleshooting).
@@ -26,7 +29,7 @@ import sys
 
 from roomlight.errors import RoomlightError
 
-__all__ = ["ENV_THREADS", "available_cpus", "prepare_environment", "thread_count", "apply_thread_policy",
+__all__ = ["ENV_THREADS", "AUTO", "available_cpus", "prepare_environment", "thread_count", "apply_thread_policy",
            "default_threads", "busy_cpus", "measured_threads"]
 
 from roomlight.core.cpu import ENV_THREADS, ENV_THREADS_AUTO, available_cpus, busy_cpus, measured_threads  # noqa: F401
@@ -47,25 +50,31 @@ def prepare_environment(busy: float | None = None) -> None:
         os.environ.setdefault("KMP_BLOCKTIME", "0")
 
 
-def thread_count(option: int | None = None) -> int:
-    """``option``, else ``$ROOMLIGHT_THREADS``, else :func:`available_cpus`."""
-    if option is not None:
-        return int(option)
-    raw = os.environ.get(ENV_THREADS, "").strip()
+#: The thread count that follows the machine's load (``--threads auto``).
+AUTO = "auto"
+
+
+def thread_count(option: int | str | None = None) -> int:
+    """``option``, else ``$ROOMLIGHT_THREADS``, else :func:`available_cpus`; ``auto`` (either way) is
+    :func:`measured_threads`, the CPUs less those other processes keep busy now."""
+    raw = str(option).strip() if option is not None else os.environ.get(ENV_THREADS, "").strip()
     if not raw:
         return available_cpus()
+    if raw.lower() == AUTO:
+        return measured_threads()
     try:
         n = int(raw)
         if n < 1:
             raise ValueError
     except ValueError:
-        raise RoomlightError(f"{ENV_THREADS}={raw!r}: expected a positive whole number of threads") from None
+        where = "--threads" if option is not None else ENV_THREADS
+        raise RoomlightError(f"{where}={raw!r}: expected a positive whole number of threads, or 'auto'") from None
     return n
 
 
-def apply_thread_policy(option: int | None = None) -> int | None:
-    """Apply an explicit thread count (``option``, else ``$ROOMLIGHT_THREADS``); returns it, or None
-    when neither is given (then nothing changes).
+def apply_thread_policy(option: int | str | None = None) -> int | None:
+    """Apply an explicit thread count (``option``, else ``$ROOMLIGHT_THREADS``; a number or ``auto``);
+    returns it, or None when neither is given (then nothing changes).
 
     The count is exported as ``$ROOMLIGHT_THREADS`` and ``$OMP_NUM_THREADS`` so that worker
     processes and the Mitsuba setup (:func:`roomlight.core.render.variant.ensure_variant`) use the
@@ -75,13 +84,15 @@ def apply_thread_policy(option: int | None = None) -> int | None:
     """
     if option is None and not os.environ.get(ENV_THREADS, "").strip():
         return None
+    auto = str(option if option is not None else os.environ.get(ENV_THREADS, "")).strip().lower() == AUTO
     n = thread_count(option)
     os.environ[ENV_THREADS] = os.environ["OMP_NUM_THREADS"] = str(n)
-    if option is not None:
-        # A count the user gives is fixed: drop the mark that the program measured its own count at
-        # start-up, or a long command's re-measurement (recheck_threads) would change it mid-run and,
-        # with it, the order of torch's float reductions (a resumed training run would then differ
-        # from an uninterrupted one).
+    if auto:
+        # Measured from the load: long commands measure again between their phases (recheck_threads).
+        os.environ[ENV_THREADS_AUTO] = "1"
+    elif option is not None:
+        # A count is fixed: no re-measurement may change it mid-run and, with it, the order of torch's
+        # float reductions (a resumed training run would then differ from an uninterrupted one).
         os.environ.pop(ENV_THREADS_AUTO, None)
     if "torch" in sys.modules:  # torch reads OMP_NUM_THREADS only when it loads
         sys.modules["torch"].set_num_threads(n)
@@ -89,9 +100,14 @@ def apply_thread_policy(option: int | None = None) -> int | None:
 
 
 def default_threads() -> None:
-    """``$ROOMLIGHT_THREADS`` defaults to :func:`measured_threads` (the program's start); it is then
-    marked as measured (``$ROOMLIGHT_THREADS_AUTO=1``), so that long commands measure again between
-    their phases (:func:`roomlight.core.render.variant.recheck_threads`). A count the user gives stays fixed."""
-    if not os.environ.get(ENV_THREADS, "").strip():
+    """``$ROOMLIGHT_THREADS`` defaults to :func:`available_cpus`, whatever else runs: the same command
+    then gives the same numbers beside another job as on an idle machine. ``ROOMLIGHT_THREADS=auto``
+    measures the load instead and marks the count as measured (``$ROOMLIGHT_THREADS_AUTO=1``), so that
+    long commands measure again between their phases (:func:`roomlight.core.render.variant.recheck_threads`)."""
+    raw = os.environ.get(ENV_THREADS, "").strip()
+    if not raw:
+        os.environ[ENV_THREADS] = str(available_cpus())
+        os.environ.pop(ENV_THREADS_AUTO, None)
+    elif raw.lower() == AUTO:
         os.environ[ENV_THREADS] = str(measured_threads())
         os.environ[ENV_THREADS_AUTO] = "1"
