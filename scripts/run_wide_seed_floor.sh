@@ -3,8 +3,9 @@
 # spread (docs/results.md, "The wide photo suite"): the oracle scored again (is the rebuilt suite the
 # committed one?), the default fitted again with the records' seed (does
 # today's code reproduce the committed records?), then both objectives with another seed (`--set seed=1000`),
-# and the comparison with each side averaged over its two seeds. ~1 h 15 min on 2 cores, one job at a time,
-# on an idle machine (another job beside it perturbs the fits like another seed). Resumable.
+# and the comparison with each side averaged over its two seeds; the prior at infinity with both seeds, for
+# the 2.5D light's lead over it. ~1 h 30 min on 2 cores, one job at a time (another job beside it
+# changes no number, only the time). Resumable.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 R=.venv/bin/roomlight
@@ -17,6 +18,9 @@ $R bench run-photos bench/wide24 --out results/wide24-oracle --preset fast --eva
 $R bench run-photos bench/wide24 --out results/wide24-default "${FIT[@]}"
 $R bench run-photos bench/wide24 --out results/wide24-seed1000 "${FIT[@]}" --set seed=1000
 $R bench run-photos bench/wide24 --out results/wide24-paper-objective-seed1000 "${FIT[@]}" "${PAPER[@]}" --set seed=1000
+ENV=(--preset fast --eval-spp 64 --quiet --methods prior-envmap)   # the prior at infinity, both seeds
+$R bench run-photos bench/wide24 --out results/wide24-envmap "${ENV[@]}"
+$R bench run-photos bench/wide24 --out results/wide24-envmap-seed1000 "${ENV[@]}" --set seed=1000
 C=(.venv/bin/python scripts/compare_bench_runs.py)
 echo "== the oracle on the rebuilt suite - the committed oracle (zero everywhere: the same photographs)"
 "${C[@]}" $REC/wide24-room-bound results/wide24-oracle --suffix +now --method oracle
@@ -31,3 +35,10 @@ echo "== default - paper objective, one seed (the committed comparison)"
 echo "== default - paper objective, each averaged over seeds 0 and 1000"
 "${C[@]}" $REC/wide24-paper-objective,results/wide24-paper-objective-seed1000 \
     results/wide24-default,results/wide24-seed1000 --suffix +default --method prior
+echo "== prior - prior-envmap, one seed, both fitted again on the rebuilt suite"
+"${C[@]}" results/wide24-envmap results/wide24-default --suffix +x --method prior
+echo "== prior-envmap, seed 1000 - seed 0"
+"${C[@]}" results/wide24-envmap results/wide24-envmap-seed1000 --suffix +seed1000 --method prior-envmap
+echo "== prior - prior-envmap, each averaged over seeds 0 and 1000"
+"${C[@]}" results/wide24-envmap,results/wide24-envmap-seed1000 results/wide24-default,results/wide24-seed1000 \
+    --suffix +x --method prior

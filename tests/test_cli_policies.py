@@ -95,7 +95,7 @@ def test_threads_option_and_environment_variable_set_torch_threads():
     assert r.returncode == 2 and "0 is not a positive number of threads" in r.stderr and "Traceback" not in r.stderr
 
 
-def test_default_threads_are_the_free_cpus_this_process_may_use(monkeypatch):
+def test_auto_threads_are_the_free_cpus_this_process_may_use(monkeypatch):
     from roomlight.core import cpu
 
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2, 3}, raising=False)
@@ -143,7 +143,7 @@ def _spin_for(seconds: float) -> None:
         pass
 
 
-def test_the_recheck_follows_the_load_only_for_a_count_roomlight_chose(monkeypatch):
+def test_the_recheck_follows_the_load_only_under_auto(monkeypatch):
     import torch
 
     from roomlight.core import cpu
@@ -170,10 +170,13 @@ def test_the_recheck_follows_the_load_only_for_a_count_roomlight_chose(monkeypat
         monkeypatch.setenv("OMP_NUM_THREADS", str(before))
 
 
-def test_a_thread_count_given_on_the_command_line_is_not_measured_again(monkeypatch):
-    """By default ``roomlight`` takes every CPU it may use and never measures again; asked for ``auto`` it
-    measures the load at start-up and marks the count as its own; ``--threads N`` then replaces it, and
-    the mark must go with it, or the re-measurement between phases would change N mid-run."""
+def test_only_auto_follows_the_load_and_its_mark_ends_with_the_request(monkeypatch):
+    """By default ``roomlight`` takes every CPU it may use and never measures again; ``auto`` (option or
+    environment) measures the load and marks the count, so that long commands measure again; any other
+    request removes the mark, including ``--threads N`` replacing it and a later request without it, or
+    the re-measurement between phases would change a fixed count mid-run."""
+    from unittest import mock
+
     import torch
 
     from roomlight.core import cpu
@@ -181,25 +184,30 @@ def test_a_thread_count_given_on_the_command_line_is_not_measured_again(monkeypa
     from roomlight.core.render import variant
 
     before = torch.get_num_threads()
-    for name in ("ROOMLIGHT_THREADS", "ROOMLIGHT_THREADS_AUTO", "ROOMLIGHT_DETERMINISTIC"):
-        monkeypatch.delenv(name, raising=False)
     monkeypatch.setattr(cpu, "measured_threads", lambda exclude_self=False: 2)
     monkeypatch.setattr("roomlight.cli.threads.measured_threads", cpu.measured_threads)
     monkeypatch.setattr("roomlight.cli.threads.available_cpus", lambda: 3)
+    marked = lambda: os.environ.get("ROOMLIGHT_THREADS_AUTO") == "1"  # noqa: E731
+    clean = {k: v for k, v in os.environ.items()
+             if k not in ("ROOMLIGHT_THREADS", "ROOMLIGHT_THREADS_AUTO", "ROOMLIGHT_DETERMINISTIC", "OMP_NUM_THREADS")}
     try:
-        default_threads()                       # the program's start, nothing asked: every CPU, fixed
-        assert os.environ["ROOMLIGHT_THREADS"] == "3" and "ROOMLIGHT_THREADS_AUTO" not in os.environ
-        monkeypatch.setenv("ROOMLIGHT_THREADS", "auto")
-        default_threads()                       # ROOMLIGHT_THREADS=auto: measured, so marked
-        assert os.environ["ROOMLIGHT_THREADS"] == "2" and os.environ["ROOMLIGHT_THREADS_AUTO"] == "1"
-        assert apply_thread_policy() == 2       # the group's own call keeps the mark
-        assert os.environ["ROOMLIGHT_THREADS_AUTO"] == "1"
-        assert apply_thread_policy(1) == 1      # --threads 1
-        assert "ROOMLIGHT_THREADS_AUTO" not in os.environ
-        assert variant.recheck_threads() is None and torch.get_num_threads() == 1
+        with mock.patch.dict(os.environ, clean, clear=True):  # every variable restored afterwards
+            default_threads()                       # the program's start, nothing asked: every CPU, fixed
+            assert apply_thread_policy() == 3 and not marked()
+            os.environ["ROOMLIGHT_THREADS"] = "auto"
+            default_threads()                       # left for the policy to measure
+            assert apply_thread_policy() == 2 and marked() and os.environ["ROOMLIGHT_THREADS"] == "2"
+            assert apply_thread_policy(1) == 1 and not marked()   # --threads 1 replaces it
+            assert variant.recheck_threads() is None and torch.get_num_threads() == 1
+            assert apply_thread_policy("auto") == 2 and marked()  # --threads auto
+            os.environ["ROOMLIGHT_THREADS_AUTO"] = "1"            # inherited from an earlier auto
+            os.environ["ROOMLIGHT_THREADS"] = "3"
+            assert apply_thread_policy() == 3 and not marked()
+            os.environ["ROOMLIGHT_THREADS_AUTO"] = "1"
+            del os.environ["ROOMLIGHT_THREADS"]                   # a later command that asks for nothing
+            assert apply_thread_policy() is None and not marked()
     finally:
         torch.set_num_threads(before)
-        monkeypatch.setenv("OMP_NUM_THREADS", str(before))
 
 
 # ----------------------------------------------------------------------------- options
@@ -335,28 +343,3 @@ def test_openmp_waits_passively_only_beside_busy_processes(monkeypatch):
     monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
     prepare_environment(busy=1.0)                      # the user's choice stays
     assert os.environ["OMP_WAIT_POLICY"] == "ACTIVE"
-
-
-def test_load_beside_spinning_threads_is_reported_once_and_changes_nothing(monkeypatch):
-    """A fixed thread count is never changed mid-run; when other processes start beside its spinning
-    OpenMP threads, a long command hears it once (through ``note``), and not at all where the threads
-    already sleep when idle or the machine is quiet."""
-    from roomlight.core import cpu
-    from roomlight.core.render import variant
-
-    for name in ("ROOMLIGHT_THREADS_AUTO", "ROOMLIGHT_DETERMINISTIC", "OMP_WAIT_POLICY"):
-        monkeypatch.delenv(name, raising=False)
-    monkeypatch.setenv("ROOMLIGHT_THREADS", "2")
-    monkeypatch.setattr(variant, "_warned_spinning", False)
-    busy = {"cpus": 0.2}
-    monkeypatch.setattr(cpu, "busy_cpus", lambda interval=0.05, exclude_self=False: busy["cpus"])
-    notes = []
-    assert variant.recheck_threads(note=notes.append) is None and notes == []      # quiet machine
-    busy["cpus"] = 1.0
-    monkeypatch.setenv("OMP_WAIT_POLICY", "PASSIVE")
-    assert variant.recheck_threads(note=notes.append) is None and notes == []      # threads already sleep
-    monkeypatch.delenv("OMP_WAIT_POLICY")
-    assert variant.recheck_threads(note=notes.append) is None and len(notes) == 1
-    assert "1.0 CPU(s) busy" in notes[0] and "--threads auto" in notes[0]
-    assert variant.recheck_threads(note=notes.append) is None and len(notes) == 1  # once
-    assert os.environ["ROOMLIGHT_THREADS"] == "2"

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from roomlight.cli.threads import apply_thread_policy, default_threads, prepare_environment
+from roomlight.cli.threads import AUTO, apply_thread_policy, default_threads, prepare_environment
 
 prepare_environment()  # passive OpenMP waiting: before anything imports torch
 
@@ -18,12 +18,13 @@ class ThreadCount(click.ParamType):
     name = "threads"
 
     def convert(self, value, param, ctx):
-        if isinstance(value, int) or str(value).strip().lower() == "auto":
-            return value if isinstance(value, int) else "auto"
+        text = str(value).strip()
+        if text.lower() == AUTO:
+            return AUTO
         try:
-            n = int(str(value).strip())
+            n = int(text)
         except ValueError:
-            self.fail(f"{value!r} is neither a positive whole number nor 'auto'", param, ctx)
+            self.fail(f"{value!r} is neither a positive whole number nor {AUTO!r}", param, ctx)
         if n < 1:
             self.fail(f"{n} is not a positive number of threads", param, ctx)
         return n
@@ -34,7 +35,7 @@ class ThreadCount(click.ParamType):
 @click.option("--threads", type=ThreadCount(), default=None, metavar="N|auto",
               help="Threads for torch and Mitsuba [default: $ROOMLIGHT_THREADS, else the CPUs available]. "
                    "'auto': the CPUs other processes leave free, measured again between long phases "
-                   "(faster beside other jobs, but the numbers then depend on them).")
+                   "(the numbers then depend on what runs beside them; docs/troubleshooting.md).")
 @click.option("--deterministic", is_flag=True,
               help="Bit-identical results run to run: Mitsuba's CPU backend on one thread (slower; "
                    "docs/troubleshooting.md). Also $ROOMLIGHT_DETERMINISTIC=1.")

@@ -74,26 +74,29 @@ def thread_count(option: int | str | None = None) -> int:
 
 def apply_thread_policy(option: int | str | None = None) -> int | None:
     """Apply an explicit thread count (``option``, else ``$ROOMLIGHT_THREADS``; a number or ``auto``);
-    returns it, or None when neither is given (then nothing changes).
+    returns it, or None when neither is given (then no count is set).
 
     The count is exported as ``$ROOMLIGHT_THREADS`` and ``$OMP_NUM_THREADS`` so that worker
     processes and the Mitsuba setup (:func:`roomlight.core.render.variant.ensure_variant`) use the
     same number. The ``roomlight`` program sets ``$ROOMLIGHT_THREADS`` to :func:`available_cpus`
     when it starts (see :func:`default_threads`), so a command always runs under the policy; code
     that calls the command group in-process keeps its own settings unless it asks.
+
+    ``$ROOMLIGHT_THREADS_AUTO`` marks the count as measured from the load, so that long commands measure
+    again between their phases (:func:`roomlight.core.render.variant.recheck_threads`); it is set when
+    ``auto`` is asked for and removed otherwise, so that no re-measurement changes a fixed count mid-run
+    and, with it, the order of torch's float reductions (a resumed training run would then differ from
+    an uninterrupted one), and no earlier ``auto`` outlives its command.
     """
-    if option is None and not os.environ.get(ENV_THREADS, "").strip():
+    requested = str(option).strip() if option is not None else os.environ.get(ENV_THREADS, "").strip()
+    if requested.lower() != AUTO:
+        os.environ.pop(ENV_THREADS_AUTO, None)
+    if not requested:
         return None
-    auto = str(option if option is not None else os.environ.get(ENV_THREADS, "")).strip().lower() == AUTO
     n = thread_count(option)
     os.environ[ENV_THREADS] = os.environ["OMP_NUM_THREADS"] = str(n)
-    if auto:
-        # Measured from the load: long commands measure again between their phases (recheck_threads).
+    if requested.lower() == AUTO:
         os.environ[ENV_THREADS_AUTO] = "1"
-    elif option is not None:
-        # A count is fixed: no re-measurement may change it mid-run and, with it, the order of torch's
-        # float reductions (a resumed training run would then differ from an uninterrupted one).
-        os.environ.pop(ENV_THREADS_AUTO, None)
     if "torch" in sys.modules:  # torch reads OMP_NUM_THREADS only when it loads
         sys.modules["torch"].set_num_threads(n)
     return n
@@ -101,13 +104,7 @@ def apply_thread_policy(option: int | str | None = None) -> int | None:
 
 def default_threads() -> None:
     """``$ROOMLIGHT_THREADS`` defaults to :func:`available_cpus`, whatever else runs: the same command
-    then gives the same numbers beside another job as on an idle machine. ``ROOMLIGHT_THREADS=auto``
-    measures the load instead and marks the count as measured (``$ROOMLIGHT_THREADS_AUTO=1``), so that
-    long commands measure again between their phases (:func:`roomlight.core.render.variant.recheck_threads`)."""
-    raw = os.environ.get(ENV_THREADS, "").strip()
-    if not raw:
+    then gives the same numbers beside another job as on an idle machine. ``ROOMLIGHT_THREADS=auto`` is
+    left for :func:`apply_thread_policy` to measure."""
+    if not os.environ.get(ENV_THREADS, "").strip():
         os.environ[ENV_THREADS] = str(available_cpus())
-        os.environ.pop(ENV_THREADS_AUTO, None)
-    elif raw.lower() == AUTO:
-        os.environ[ENV_THREADS] = str(measured_threads())
-        os.environ[ENV_THREADS_AUTO] = "1"

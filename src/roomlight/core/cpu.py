@@ -1,7 +1,8 @@
 """How many CPUs this process may use and how many other processes keep busy (``/proc/stat``).
 
 The measurements behind the thread policy (:mod:`roomlight.cli.threads` applies it when a command
-starts; :func:`roomlight.core.render.variant.recheck_threads` applies it again between long phases).
+starts; under ``--threads auto``, :func:`roomlight.core.render.variant.recheck_threads` measures the load
+again between long phases).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ __all__ = ["ENV_THREADS", "ENV_THREADS_AUTO", "available_cpus", "busy_cpus", "me
 
 #: The thread count of torch and Dr.Jit (``--threads`` sets it).
 ENV_THREADS = "ROOMLIGHT_THREADS"
-#: "1" when :data:`ENV_THREADS` was measured by roomlight rather than given: only then do long commands
+#: "1" when :data:`ENV_THREADS` was measured from the load (``--threads auto``): only then do long commands
 #: measure the load again between their phases and follow it.
 ENV_THREADS_AUTO = "ROOMLIGHT_THREADS_AUTO"
 

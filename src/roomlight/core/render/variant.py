@@ -135,8 +135,7 @@ def recheck_threads(note=None) -> int | None:
     """Measure the load again and follow it: between the long phases of a command (benchmark cases,
     training validations) the other processes may have changed. Only when asked for (``--threads auto``,
     which the ``roomlight`` program marks, :data:`roomlight.core.cpu.ENV_THREADS_AUTO`); the default count,
-    one given with ``--threads N`` / ``$ROOMLIGHT_THREADS``, and ``--deterministic`` stay as they are (then
-    ``note``, if given, hears once that load has arrived beside spinning threads).
+    one given with ``--threads N`` / ``$ROOMLIGHT_THREADS``, and ``--deterministic`` stay as they are.
 
     Sets torch's threads and Dr.Jit's workers (at least two) to the CPUs this process may use less
     those other processes keep busy now (this process's own threads excluded); returns the new count
@@ -145,8 +144,6 @@ def recheck_threads(note=None) -> int | None:
     from roomlight.core.cpu import ENV_THREADS, ENV_THREADS_AUTO, measured_threads
 
     if os.environ.get(ENV_THREADS_AUTO) != "1" or deterministic():
-        if note is not None:
-            _warn_spinning_beside_load(note)
         return None
     n = measured_threads(exclude_self=True)
     if str(n) == os.environ.get(ENV_THREADS):
@@ -163,27 +160,6 @@ def recheck_threads(note=None) -> int | None:
     if note is not None:
         note(f"the load changed: now {n} thread(s) for torch and {max(2, n)} for Mitsuba")
     return n
-
-
-_warned_spinning = False
-
-
-def _warn_spinning_beside_load(note) -> None:
-    """Say once, through ``note``, that other processes now keep a CPU busy while OpenMP's threads wait
-    by spinning (chosen when the machine was idle at start, and fixed from then on): torch's parallel
-    regions then wait for descheduled threads, several times slower (``benchmarks/bench_threads.py``)."""
-    global _warned_spinning
-    if _warned_spinning or os.environ.get("OMP_WAIT_POLICY", "").strip().upper() == "PASSIVE":
-        return
-    from roomlight.core.cpu import busy_cpus
-
-    busy = busy_cpus(exclude_self=True)
-    if busy >= 0.5:
-        _warned_spinning = True
-        note(f"other processes now keep {busy:.1f} CPU(s) busy and this run's threads wait by spinning, which "
-             "can make its torch work several times slower; a run that is interrupted and started again "
-             "with OMP_WAIT_POLICY=PASSIVE gives the same numbers, `--threads auto` faster ones that "
-             "depend on the load")
 
 
 def deterministic() -> bool:

@@ -90,7 +90,7 @@ def _attempt(case: Case, out: Path, run_one: Callable) -> tuple[str, str | None]
     """Run one case; a failure is written to its ``error.json`` and returned as text."""
     from roomlight.core.render.variant import recheck_threads
 
-    recheck_threads()  # between cases the load may have changed (only for a thread count roomlight chose)
+    recheck_threads()  # between cases the load may have changed (followed only under --threads auto)
     try:
         run_one(case)
         return case.name, None
