@@ -343,3 +343,19 @@ def test_openmp_waits_passively_only_beside_busy_processes(monkeypatch):
     monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
     prepare_environment(busy=1.0)                      # the user's choice stays
     assert os.environ["OMP_WAIT_POLICY"] == "ACTIVE"
+
+
+def test_a_record_names_the_threads_and_policy_it_was_made_with(monkeypatch):
+    import torch
+
+    from roomlight.core.render import variant
+
+    monkeypatch.delenv("ROOMLIGHT_DETERMINISTIC", raising=False)
+    monkeypatch.delenv("ROOMLIGHT_THREADS_AUTO", raising=False)
+    rec = variant.thread_record()
+    assert rec["torch"] == torch.get_num_threads() and rec["policy"] == "fixed" and rec["deterministic"] is False
+    monkeypatch.setenv("ROOMLIGHT_THREADS_AUTO", "1")
+    monkeypatch.setenv("ROOMLIGHT_DETERMINISTIC", "1")
+    rec = variant.thread_record()
+    assert rec["policy"] == "auto" and rec["deterministic"] is True
+

@@ -58,6 +58,10 @@ def test_the_same_fit_twice_is_bit_identical(tmp_path):
     assert np.array_equal(pa.radiance, pb.radiance) and np.array_equal(pa.depth, pb.depth)
     ra, rb = (json.loads((tmp_path / n / "result.json").read_text()) for n in "ab")
     assert ra["objective"] == rb["objective"] and ra["materials"] == rb["materials"]
+    # each record says what it was computed with: --threads 2 here (ROOMLIGHT_THREADS), one Dr.Jit worker
+    # throughout under --deterministic
+    assert ra["threads"] == {"torch": 2, "mitsuba": 2, "policy": "fixed", "deterministic": False}
+    assert rb["threads"] == {"torch": 2, "mitsuba": 1, "policy": "fixed", "deterministic": True}
 
 
 @pytest.mark.mitsuba

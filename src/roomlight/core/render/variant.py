@@ -15,7 +15,7 @@ import sys
 
 from roomlight.errors import BackendError
 
-__all__ = ["MIN_LLVM", "ENV_DETERMINISTIC", "ENV_PARALLEL_BACKWARD", "serial_backward", "worker_count", "recheck_threads", "deterministic", "llvm_status", "cuda_available", "choose_variant",
+__all__ = ["MIN_LLVM", "ENV_DETERMINISTIC", "ENV_PARALLEL_BACKWARD", "serial_backward", "worker_count", "recheck_threads", "thread_record", "deterministic", "llvm_status", "cuda_available", "choose_variant",
            "ensure_variant", "mitsuba", "torch_device"]
 
 MIN_LLVM = (16, 0, 0)
@@ -160,6 +160,25 @@ def recheck_threads(note=None) -> int | None:
     if note is not None:
         note(f"the load changed: now {n} thread(s) for torch and {max(2, n)} for Mitsuba")
     return n
+
+
+def thread_record() -> dict:
+    """The threads a result is being computed with, for its record: CPU results depend on them in their
+    last bits (torch splits its float sums by thread), so two records that differ there may differ in
+    their numbers too (docs/troubleshooting.md, "The same command twice gives the same numbers").
+
+    ``torch``: torch's intra-op threads; ``mitsuba``: Dr.Jit's CPU workers outside adjoint passes (None
+    before the CPU variant is active, or on a GPU); ``policy``: ``auto`` when the count follows the load
+    (``--threads auto``), else ``fixed``; ``deterministic``: ``--deterministic``.
+    """
+    import torch
+
+    from roomlight.core.cpu import ENV_THREADS_AUTO
+
+    cpu_variant = _active is not None and _active.startswith("llvm")
+    return {"torch": int(torch.get_num_threads()), "mitsuba": worker_count() if cpu_variant else None,
+            "policy": "auto" if os.environ.get(ENV_THREADS_AUTO) == "1" else "fixed",
+            "deterministic": deterministic()}
 
 
 def deterministic() -> bool:

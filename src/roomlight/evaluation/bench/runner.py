@@ -36,6 +36,7 @@ from pathlib import Path
 
 import torch
 
+from roomlight.core.render.variant import thread_record
 from roomlight.evaluation.bench.builder import read_manifest
 from roomlight.evaluation.harness.errors import BenchError
 from roomlight.evaluation.harness.records import RESULT, RUN_FILE, check_run_file, json_default, record_failure, write_json
@@ -170,7 +171,7 @@ def run_case(case: SceneCase, out_dir, fit, fit_config=None, model=None, eval_sp
         "best_iteration": getattr(result, "best_iteration", None),
         "iterations": sum(1 for h in history if "total" in h) if history else None,
         "nonfinite_steps": getattr(result, "nonfinite_steps", None),
-        "recovered_resolution": list(result.radiance.shape[:2]), "eval_spp": eval_spp,
+        "recovered_resolution": list(result.radiance.shape[:2]), "eval_spp": eval_spp, "threads": thread_record(),
         "outside": objects_outside(scene, depth),
         "files": {"recovered": "recovered.exr", "input": "input.exr", "eval": "eval.exr", "fit": "fit"},
     }

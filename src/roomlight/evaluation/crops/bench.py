@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from roomlight.core.render.variant import thread_record
 from roomlight.errors import RoomlightError
 from roomlight.evaluation.harness.records import RESULT, write_json
 from roomlight.evaluation.harness.runner import Case, run_cases
@@ -153,7 +154,7 @@ def run_crop_case(case: Case, out_dir, model=None, spp: int = 256) -> dict:
     rows = [np.concatenate([mine[m], true[m]], 1) for m in mine]
     save_png(cdir / "spheres.png", tonemap_gamma(np.concatenate(rows, 0)))
     record = {"crop": case.item, "method": case.method, "scores": scores, "predict_seconds": round(seconds, 4),
-              "spp": spp, "sphere_pixels": int(mask.sum())}
+              "spp": spp, "sphere_pixels": int(mask.sum()), "threads": thread_record()}
     write_json(cdir / RESULT, record)
     return record
 

@@ -42,6 +42,7 @@ import time
 from functools import partial
 from pathlib import Path
 
+from roomlight.core.render.variant import thread_record
 from roomlight.errors import RoomlightError
 from roomlight.evaluation.harness.records import RESULT, RUN_FILE, check_run_file, write_json
 from roomlight.evaluation.harness.runner import Case, RunSummary, run_cases, shard_cases
@@ -145,7 +146,7 @@ def run_photo_case(case: Case, out_dir, preset: str = "paper", model=None, eval_
               "insertion_truth": insert_truth_stamp(Path(case.source) / fmt.TRUTH) if insertion else None,
               "depth_factors": truth.depth_factors, "fit_seconds": fit_seconds, "wall_seconds": wall,
               "eval_seconds": time.perf_counter() - t1, "eval_spp": eval_spp, "max_depth": SCORE_MAX_DEPTH,
-              "recovered_resolution": list(light.radiance.shape[:2]),
+              "recovered_resolution": list(light.radiance.shape[:2]), "threads": thread_record(),
               "files": {"recovered": "recovered.exr", **{m: f"probes_{m}.exr" for m in renders},
                         **({"insert": INSERT_COMPOSITE} if insertion else {}),
                         **({"fit": "fit"} if fitted else {})}}

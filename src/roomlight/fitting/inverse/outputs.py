@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from roomlight.core.render.variant import thread_record
+
 __all__ = ["write_fit_outputs", "plot_history", "light_summary", "extreme_light_note", "recorded_light_note", "EXTREME_CONTRAST"]
 
 #: Brightest texel over median luminance above which a recovered light is flagged. The 2400
@@ -109,7 +111,7 @@ def write_fit_outputs(out: Path, result, fitter, target: torch.Tensor, mask: tor
     summary = {"method": result.method, "emitter_kind": result.emitter_kind, "best_iteration": result.best_iteration,
                "best_fixed_seed_loss": result.best_loss, "seconds": round(result.seconds, 3),
                "nonfinite_steps": result.nonfinite_steps, "light": light_summary(rad),
-               "light_parameters": fitter.light.describe(), "config": result.config,
+               "light_parameters": fitter.light.describe(), "config": result.config, "threads": thread_record(),
                "files": {k: str(v.relative_to(out)) for k, v in paths.items()}}
     paths["result"] = out / "result.json"
     paths["result"].write_text(json.dumps(summary, indent=2))

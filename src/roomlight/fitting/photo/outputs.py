@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from roomlight.core.render.variant import thread_record
+
 __all__ = ["atomic_write", "write_fit_files", "light_view", "RESULT_FORMAT"]
 
 RESULT_FORMAT = "roomlight.photo-fit"
@@ -164,6 +166,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "inputs": inputs,
         "settings": config.to_dict(),
         "timings": timings,
+        "threads": thread_record(),
         "notes": list(case.notes),
         **(extra or {}),
         "files": {k: str(v.relative_to(out)) for k, v in paths.items()},
