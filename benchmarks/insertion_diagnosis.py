@@ -433,10 +433,11 @@ def table(records: list[dict]) -> str:
 
 def distance_table(records: list[dict], pairs, reps: int = 2000) -> str:
     """The 2.5D light's advantage against distance: per pair, a − b on region, object and shadow PSNR by
-    stratum (or by distance tercile when the objects have none), and the slope over distance with a 95 %
-    bootstrap interval over objects."""
-    lines = ["| pair | score | " + " | ".join(("near", "middle", "far", "raised")) + " | slope (dB/m) |",
-             "|---|---|" + ":---:|" * 5]
+    stratum (or by distance tercile when the objects have none), and the slope over distance with 95 %
+    bootstrap intervals over objects and over photos (a photo's objects share its fitted light)."""
+    lines = ["| pair | score | " + " | ".join(("near", "middle", "far", "raised"))
+             + " | slope (dB/m) [over objects] | over photos |",
+             "|---|---|" + ":---:|" * 6]
     for a, b in pairs:
         ka = {(r["photo"], r["id"]): r for r in records if r["variant"] == a}
         kb = {(r["photo"], r["id"]): r for r in records if r["variant"] == b}
@@ -461,8 +462,11 @@ def distance_table(records: list[dict], pairs, reps: int = 2000) -> str:
                 else:
                     cells.append("–")
             slope, lo, hi = bootstrap_slope_interval(dist[ok], diff[ok], resamples=reps)
+            photos = [k[0] for k, good in zip(keys, ok) if good]
+            _, plo, phi = bootstrap_slope_interval(dist[ok], diff[ok], resamples=reps, clusters=photos)
             # objects all at one distance have no slope to fit
             cells.append("–" if not math.isfinite(slope) else f"{slope:+.2f} [{lo:+.2f}, {hi:+.2f}]")
+            cells.append("–" if not math.isfinite(slope) else f"[{plo:+.2f}, {phi:+.2f}]")
             lines.append(f"| {a} − {b} | {key} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

@@ -364,3 +364,42 @@ def test_slope_and_its_bootstrap_interval():
     ref = float(((xs - xs.mean()) * (ys - ys.mean())).sum() / ((xs - xs.mean()) ** 2).sum())
     assert slope == pytest.approx(ref) and lo < ref < hi and hi - lo < 0.5
     assert all(math.isnan(v) for v in bootstrap_slope_interval([2.0, 2.0, 2.0], [1.0, 2.0, 3.0]))
+
+
+def test_the_slope_bootstrap_resamples_whole_clusters():
+    """Two photos, each with objects on a line of slope 1 at its own offset (a light per photo that is
+    brighter or dimmer throughout): any draw of whole photos has slope exactly 1, so the clustered interval
+    is [1, 1]; drawing objects apart mixes one photo's near object with the other's far one (slope 11 or
+    -9), so that interval is wide. One object per cluster gives the object bootstrap draw for draw."""
+    from roomlight.core.stats import bootstrap_slope_interval
+
+    x = np.array([0.0, 1.0, 0.0, 1.0])
+    y = np.array([0.0, 1.0, 10.0, 11.0])
+    photos = ["a", "a", "b", "b"]
+    assert bootstrap_slope_interval(x, y, clusters=photos) == (pytest.approx(1.0), pytest.approx(1.0),
+                                                              pytest.approx(1.0))
+    slope, lo, hi = bootstrap_slope_interval(x, y)
+    assert slope == pytest.approx(1.0) and lo < -5.0 and hi > 5.0
+    rng = np.random.default_rng(3)
+    xs, ys = rng.uniform(0, 4, 12), rng.normal(0, 1, 12)
+    assert bootstrap_slope_interval(xs, ys, clusters=list(range(12))) == bootstrap_slope_interval(xs, ys)
+    with pytest.raises(ValueError, match="one label per pair"):
+        bootstrap_slope_interval(xs, ys, clusters=[0, 1])
+
+
+def test_the_photo_reports_distance_slope_is_also_resampled_by_photo():
+    """Two photos whose objects gain 1 dB per metre over their own offsets (0 and 10 dB): the slope is 1, over
+    photos its interval is exactly [1, 1] (any draw of whole photos keeps both lines intact), over objects
+    it spans the mixes of one photo's near object with the other's far one."""
+    from roomlight.evaluation.photobench.report import insertion_summary
+
+    records = []
+    for photo, offset in (("photo-00000", 0.0), ("photo-00001", 10.0)):
+        for obj, d in (("insert1", 1.0), ("insert2", 2.0)):
+            for method, psnr in (("prior", 20.0 + offset + d), ("prior-envmap", 20.0)):
+                records.append({"scene": f"{photo}/{obj}", "material": "objects", "method": method,
+                                "distance_m": d, "metrics": {"insert": {"psnr_ldr": psnr}}})
+    d = insertion_summary(records)["distance"]
+    assert d["slope_db_per_m"] == pytest.approx(1.0)
+    assert d["slope_ci95_by_photo"] == [pytest.approx(1.0), pytest.approx(1.0)]
+    assert d["slope_ci95"][0] < -5.0 and d["slope_ci95"][1] > 5.0

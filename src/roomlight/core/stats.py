@@ -35,21 +35,31 @@ def bootstrap_mean_interval(values, level: float = 0.95, resamples: int = RESAMP
 
 
 def bootstrap_slope_interval(x, y, level: float = 0.95, resamples: int = 2000,
-                             seed: int = 0) -> tuple[float, float, float]:
+                             seed: int = 0, clusters=None) -> tuple[float, float, float]:
     """Least-squares slope of ``y`` over ``x`` (1-D, finite, same length) and its percentile-bootstrap interval:
     (slope, lo, hi), in units of y per unit of x.
 
-    Pairs (x, y) are resampled with replacement; a resample whose x are all equal has no slope and is
-    skipped. Without two distinct x the slope is nan, and so is the interval when no resample has one.
+    Pairs (x, y) are resampled with replacement; with ``clusters`` (one label per pair, e.g. the photo
+    an inserted object stands in, whose objects share one fitted light and so are not independent) whole
+    clusters are resampled instead, each with all its pairs. A resample whose x are all equal has no slope
+    and is skipped. Without two distinct x the slope is nan, and so is the interval when no resample has one.
     """
     x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
     if x.size < 2 or np.ptp(x) == 0:
         return float("nan"), float("nan"), float("nan")
     slope = float(np.polyfit(x, y, 1)[0])
+    if clusters is None:
+        groups = [np.array([k]) for k in range(x.size)]
+    else:
+        labels = np.asarray(clusters)
+        if labels.shape != x.shape:
+            raise ValueError(f"clusters: one label per pair expected, got {labels.shape} for {x.shape}")
+        groups = [np.flatnonzero(labels == c) for c in dict.fromkeys(labels.tolist())]
     rng = np.random.default_rng(seed)
     boots = []
     for _ in range(resamples):
-        i = rng.integers(0, x.size, x.size)
+        drawn = rng.integers(0, len(groups), len(groups))
+        i = np.concatenate([groups[g] for g in drawn])
         if np.ptp(x[i]) > 0:
             boots.append(np.polyfit(x[i], y[i], 1)[0])
     if not boots:

@@ -381,14 +381,18 @@ def insertion_summary(records: list[dict], reference: str = "prior") -> dict:
     table: dict[str, dict] = {}
     for r in records:
         table.setdefault(r["scene"], {"d": r["distance_m"]})[r["method"]] = r["metrics"]["insert"]["psnr_ldr"]
-    pairs = [(v["d"], v["prior"] - v["prior-envmap"]) for v in table.values() if "prior" in v and "prior-envmap" in v]
+    both = [(scene, v) for scene, v in table.items() if "prior" in v and "prior-envmap" in v]
+    pairs = [(v["d"], v["prior"] - v["prior-envmap"]) for _, v in both]
     distance = None
     if len(pairs) >= 4:
         d, diff = np.asarray(pairs).T
         med = float(np.median(d))
         near, far = diff[d <= med], diff[d > med]
         slope, lo, hi = bootstrap_slope_interval(d, diff)
+        # a photo's objects share its fitted light: resampling photos is the interval of independent draws
+        _, plo, phi = bootstrap_slope_interval(d, diff, clusters=[insertion_photo(scene) for scene, _ in both])
         distance = {"n": len(pairs), "median_m": med, "slope_db_per_m": slope, "slope_ci95": [lo, hi],
+                    "slope_ci95_by_photo": [plo, phi],
                     "near": {"mean": float(near.mean()), "ci95": list(bootstrap_mean_interval(near)), "n": len(near)},
                     "far": {"mean": float(far.mean()), "ci95": list(bootstrap_mean_interval(far)), "n": len(far)}}
     return {"methods": methods, "paired": paired, "paired_by_photo": paired_by_photo, "distance": distance,
@@ -440,7 +444,9 @@ def _insertion_markdown(summary: dict | None, reference: str = "prior") -> list[
                f"({d['n']} objects): nearer than the median {d['median_m']:.2f} m {d['near']['mean']:+.2f} dB "
                f"[{d['near']['ci95'][0]:+.2f}, {d['near']['ci95'][1]:+.2f}], farther {d['far']['mean']:+.2f} dB "
                f"[{d['far']['ci95'][0]:+.2f}, {d['far']['ci95'][1]:+.2f}]; slope {d['slope_db_per_m']:+.2f} dB/m "
-               f"[{d['slope_ci95'][0]:+.2f}, {d['slope_ci95'][1]:+.2f}] (bootstrap over objects).", ""]
+               f"[{d['slope_ci95'][0]:+.2f}, {d['slope_ci95'][1]:+.2f}] (bootstrap over objects)"
+               + (f", [{d['slope_ci95_by_photo'][0]:+.2f}, {d['slope_ci95_by_photo'][1]:+.2f}] over photos"
+                  if "slope_ci95_by_photo" in d else "") + ".", ""]
     return md
 
 
