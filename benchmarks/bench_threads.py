@@ -124,7 +124,8 @@ def _spin(stop) -> None:
 
 def run_once(policy: str, steps: int) -> dict:
     env = {k: v for k, v in os.environ.items()
-           if k not in ("OMP_WAIT_POLICY", "OMP_NUM_THREADS", "KMP_BLOCKTIME", "ROOMLIGHT_THREADS")}
+           if k not in ("OMP_WAIT_POLICY", "OMP_NUM_THREADS", "KMP_BLOCKTIME", "ROOMLIGHT_THREADS",
+                        "ROOMLIGHT_THREADS_AUTO")}
     env["BENCH_POLICY"] = policy
     src = Path(__file__).resolve().parents[1] / "src"
     env["PYTHONPATH"] = os.pathsep.join([str(src), env.get("PYTHONPATH", "")])
