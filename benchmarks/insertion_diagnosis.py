@@ -466,7 +466,7 @@ def distance_table(records: list[dict], pairs, reps: int = 2000) -> str:
             _, plo, phi = bootstrap_slope_interval(dist[ok], diff[ok], resamples=reps, clusters=photos)
             # objects all at one distance have no slope to fit
             cells.append("–" if not math.isfinite(slope) else f"{slope:+.2f} [{lo:+.2f}, {hi:+.2f}]")
-            cells.append("–" if not math.isfinite(slope) else f"[{plo:+.2f}, {phi:+.2f}]")
+            cells.append("–" if not math.isfinite(plo) else f"[{plo:+.2f}, {phi:+.2f}]")
             lines.append(f"| {a} − {b} | {key} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

@@ -385,6 +385,11 @@ def test_the_slope_bootstrap_resamples_whole_clusters():
     assert bootstrap_slope_interval(xs, ys, clusters=list(range(12))) == bootstrap_slope_interval(xs, ys)
     with pytest.raises(ValueError, match="one label per pair"):
         bootstrap_slope_interval(xs, ys, clusters=[0, 1])
+    # one photo is no sample of photos: no interval rather than a zero-width one
+    slope, lo, hi = bootstrap_slope_interval(x, y, clusters=["a"] * 4)
+    assert slope == pytest.approx(1.0) and math.isnan(lo) and math.isnan(hi)
+    # labels are compared as they are: tuples are labels, 1 and "1" are two photos
+    assert bootstrap_slope_interval(x, y, clusters=[("s", 1), ("s", 1), ("s", 2), ("s", 2)])[1] == pytest.approx(1.0)
 
 
 def test_the_photo_reports_distance_slope_is_also_resampled_by_photo():

@@ -352,8 +352,17 @@ def test_a_record_names_the_threads_and_policy_it_was_made_with(monkeypatch):
 
     monkeypatch.delenv("ROOMLIGHT_DETERMINISTIC", raising=False)
     monkeypatch.delenv("ROOMLIGHT_THREADS_AUTO", raising=False)
+    monkeypatch.delenv("ROOMLIGHT_PARALLEL_BACKWARD", raising=False)
+    # no variant active (or a GPU one): no Mitsuba workers to name, and the record switches nothing on
+    monkeypatch.setattr(variant, "_active", None)
+    monkeypatch.setattr(variant, "ensure_variant", lambda prefer=None: pytest.fail("the record activated Mitsuba"))
     rec = variant.thread_record()
     assert rec["torch"] == torch.get_num_threads() and rec["policy"] == "fixed" and rec["deterministic"] is False
+    assert rec["mitsuba"] is None and rec["parallel_backward"] is False
+    monkeypatch.setattr(variant, "_active", "cuda_ad_rgb")
+    assert variant.thread_record()["mitsuba"] is None
+    monkeypatch.setenv("ROOMLIGHT_PARALLEL_BACKWARD", "1")
+    assert variant.thread_record()["parallel_backward"] is True
     monkeypatch.setenv("ROOMLIGHT_THREADS_AUTO", "1")
     monkeypatch.setenv("ROOMLIGHT_DETERMINISTIC", "1")
     rec = variant.thread_record()

@@ -17,7 +17,7 @@ SRC = Path(__file__).parents[1] / "src"
 
 def _fit(case: Path, out: Path, *flags, env_extra: dict | None = None) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]),
-           "ROOMLIGHT_THREADS": "2", **(env_extra or {})}
+           "ROOMLIGHT_THREADS": "2", "ROOMLIGHT_VARIANT": "llvm_ad_rgb", **(env_extra or {})}
     env.pop("ROOMLIGHT_DETERMINISTIC", None)
     env.pop("ROOMLIGHT_THREADS_AUTO", None)
     if not env.get("ROOMLIGHT_THREADS"):  # "" in env_extra: the program's own default
@@ -60,8 +60,10 @@ def test_the_same_fit_twice_is_bit_identical(tmp_path):
     assert ra["objective"] == rb["objective"] and ra["materials"] == rb["materials"]
     # each record says what it was computed with: --threads 2 here (ROOMLIGHT_THREADS), one Dr.Jit worker
     # throughout under --deterministic
-    assert ra["threads"] == {"torch": 2, "mitsuba": 2, "policy": "fixed", "deterministic": False}
-    assert rb["threads"] == {"torch": 2, "mitsuba": 1, "policy": "fixed", "deterministic": True}
+    assert ra["threads"] == {"torch": 2, "mitsuba": 2, "parallel_backward": False, "policy": "fixed",
+                             "deterministic": False}
+    assert rb["threads"] == {"torch": 2, "mitsuba": 1, "parallel_backward": False, "policy": "fixed",
+                             "deterministic": True}
 
 
 @pytest.mark.mitsuba

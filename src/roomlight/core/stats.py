@@ -41,25 +41,32 @@ def bootstrap_slope_interval(x, y, level: float = 0.95, resamples: int = 2000,
 
     Pairs (x, y) are resampled with replacement; with ``clusters`` (one label per pair, e.g. the photo
     an inserted object stands in, whose objects share one fitted light and so are not independent) whole
-    clusters are resampled instead, each with all its pairs. A resample whose x are all equal has no slope
-    and is skipped. Without two distinct x the slope is nan, and so is the interval when no resample has one.
+    clusters are resampled instead, each with all its pairs (fewer than two clusters: no interval, nan).
+    A resample whose x are all equal has no slope and is skipped. Without two distinct x the slope is nan,
+    and so is the interval when no resample has one.
     """
     x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
     if x.size < 2 or np.ptp(x) == 0:
         return float("nan"), float("nan"), float("nan")
     slope = float(np.polyfit(x, y, 1)[0])
-    if clusters is None:
-        groups = [np.array([k]) for k in range(x.size)]
-    else:
-        labels = np.asarray(clusters)
-        if labels.shape != x.shape:
-            raise ValueError(f"clusters: one label per pair expected, got {labels.shape} for {x.shape}")
-        groups = [np.flatnonzero(labels == c) for c in dict.fromkeys(labels.tolist())]
+    groups = None
+    if clusters is not None:
+        clusters = list(clusters)
+        if len(clusters) != x.size:
+            raise ValueError(f"clusters: one label per pair expected, got {len(clusters)} for {x.size} pairs")
+        members: dict = {}
+        for k, c in enumerate(clusters):  # first appearance order; any hashable label
+            members.setdefault(c, []).append(k)
+        if len(members) < 2:
+            return slope, float("nan"), float("nan")
+        groups = [np.array(v) for v in members.values()]
     rng = np.random.default_rng(seed)
     boots = []
     for _ in range(resamples):
-        drawn = rng.integers(0, len(groups), len(groups))
-        i = np.concatenate([groups[g] for g in drawn])
+        if groups is None:
+            i = rng.integers(0, x.size, x.size)
+        else:
+            i = np.concatenate([groups[g] for g in rng.integers(0, len(groups), len(groups))])
         if np.ptp(x[i]) > 0:
             boots.append(np.polyfit(x[i], y[i], 1)[0])
     if not boots:

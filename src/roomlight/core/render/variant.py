@@ -168,8 +168,10 @@ def thread_record() -> dict:
     their numbers too (docs/troubleshooting.md, "The same command twice gives the same numbers").
 
     ``torch``: torch's intra-op threads; ``mitsuba``: Dr.Jit's CPU workers outside adjoint passes (None
-    before the CPU variant is active, or on a GPU); ``policy``: ``auto`` when the count follows the load
-    (``--threads auto``), else ``fixed``; ``deterministic``: ``--deterministic``.
+    before the CPU variant is active, or on a GPU); ``parallel_backward``: adjoint passes on every worker
+    (``ROOMLIGHT_PARALLEL_BACKWARD=1``, whose gradients vary in their last bits run to run) instead of one;
+    ``policy``: ``auto`` when the count follows the load (``--threads auto``), else ``fixed``;
+    ``deterministic``: ``--deterministic``. Activates nothing.
     """
     import torch
 
@@ -177,6 +179,7 @@ def thread_record() -> dict:
 
     cpu_variant = _active is not None and _active.startswith("llvm")
     return {"torch": int(torch.get_num_threads()), "mitsuba": worker_count() if cpu_variant else None,
+            "parallel_backward": os.environ.get(ENV_PARALLEL_BACKWARD, "").strip().lower() in ("1", "true", "yes", "on"),
             "policy": "auto" if os.environ.get(ENV_THREADS_AUTO) == "1" else "fixed",
             "deterministic": deterministic()}
 

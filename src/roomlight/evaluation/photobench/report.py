@@ -445,8 +445,7 @@ def _insertion_markdown(summary: dict | None, reference: str = "prior") -> list[
                f"[{d['near']['ci95'][0]:+.2f}, {d['near']['ci95'][1]:+.2f}], farther {d['far']['mean']:+.2f} dB "
                f"[{d['far']['ci95'][0]:+.2f}, {d['far']['ci95'][1]:+.2f}]; slope {d['slope_db_per_m']:+.2f} dB/m "
                f"[{d['slope_ci95'][0]:+.2f}, {d['slope_ci95'][1]:+.2f}] (bootstrap over objects)"
-               + (f", [{d['slope_ci95_by_photo'][0]:+.2f}, {d['slope_ci95_by_photo'][1]:+.2f}] over photos"
-                  if "slope_ci95_by_photo" in d else "") + ".", ""]
+               f", [{d['slope_ci95_by_photo'][0]:+.2f}, {d['slope_ci95_by_photo'][1]:+.2f}] over photos.", ""]
     return md
 
 
