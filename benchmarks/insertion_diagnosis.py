@@ -384,6 +384,29 @@ def paired(records: list[dict], a: str, b: str, key: str, reps: int = 2000, seed
     return float(d.mean()), lo, hi, int((d > 0).sum()), len(d)
 
 
+def mean_over_runs(records: list[dict], runs: list[str]) -> list[dict]:
+    """Per object, each fitted method's scores averaged over several results folders (other fit seeds):
+    ``<method> (<run>)`` for every run in ``runs`` becomes ``<method> (mean of N runs)`` (scores nan where any
+    run lacks the object or has a non-finite score), so that pairs compare what each method gives on an object,
+    not one draw of it. Records of other variants are left as they are; the averaged ones are added."""
+    if len(runs) < 2:
+        return records
+    by: dict[tuple, dict[str, dict]] = {}
+    for r in records:
+        for run in runs:
+            suffix = f" ({run})"
+            if r["variant"].endswith(suffix) and " (" not in r["variant"][:-len(suffix)]:
+                by.setdefault((r["variant"][:-len(suffix)], r["photo"], r["id"]), {})[run] = r
+    added = []
+    for (method, photo, oid), got in by.items():
+        first = next(iter(got.values()))
+        scores = {k: (float(np.mean([got[run][k] for run in runs]))
+                      if len(got) == len(runs) and all(math.isfinite(got[run][k]) for run in runs) else float("nan"))
+                  for k in SCORES}
+        added.append({**first, **scores, "variant": f"{method} (mean of {len(runs)} runs)"})
+    return records + added
+
+
 def table(records: list[dict]) -> str:
     variants = sorted({r["variant"] for r in records}, key=lambda v: (not v.startswith("truth"), v))
     lines = ["| variant | objects | region PSNR LDR | object PSNR LDR | shadow PSNR LDR |", "|---|:---:|:---:|:---:|:---:|"]
@@ -507,7 +530,7 @@ def main(argv=None) -> None:
         tmp.write_text(json.dumps(done))
         tmp.replace(args.out)
     records = [r for d in photos if d.name in done for r in done[d.name]]
-    print(table(records))
+    print(table(mean_over_runs(records, [res.name for res in args.results])))
 
 
 if __name__ == "__main__":

@@ -2,7 +2,8 @@
 # The fitted prior's lead over itself at infinity on inserted objects, judged against the fit's seed:
 # the original suite's prior and prior-envmap fitted again with another seed (`--set seed=1000`), then the
 # insertion study's headline run (composites at 1024 spp, clean truth at 4096 spp) over both seeds' lights
-# in one pass (the references rendered once). ~12 min of fits, then ~3 min a photo (24 photos); resumable.
+# in one pass (the references rendered once); its tables add each method averaged over the two seeds
+# ("prior (mean of 2 runs)"). ~12 min of fits, then ~3 min a photo (24 photos); resumable.
 # Needs bench/photos24 and results/photos24-room-bound (scripts/run_insertion_by_photo.sh builds both).
 set -euo pipefail
 cd "$(dirname "$0")/.."

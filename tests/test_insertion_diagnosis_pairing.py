@@ -4,6 +4,7 @@ objects' differences averaged first (hand-computed values)."""
 from __future__ import annotations
 
 import importlib.util
+import math
 from pathlib import Path
 
 import numpy as np
@@ -59,3 +60,26 @@ def test_the_table_prints_both_pairings():
                if "object_psnr_ldr" in line)
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[2].startswith("+1.25") and cells[-2:] == ["–", "–"]   # all "near"; both slope columns empty
+
+
+def test_fitted_lights_are_also_averaged_over_runs():
+    """Two runs (fit seeds) of prior and prior-envmap: each object's scores averaged per method, a score one
+    run lacks or has non-finite left as nan, the references untouched, and the averaged pair printed."""
+    mod = _module()
+    recs = []
+    for run, shift in (("seed0", 0.0), ("seed1000", 2.0)):
+        for method, base in (("prior", 21.0), ("prior-envmap", 20.0)):
+            for oid in ("insert1", "insert2"):
+                recs.append({"photo": "p1", "id": oid, "variant": f"{method} ({run})", "distance_m": 1.0,
+                             "psnr_ldr": base + shift, "object_psnr_ldr": base + shift,
+                             "shadow_psnr_ldr": float("nan") if (run, oid) == ("seed1000", "insert2") else base})
+    recs.append({"photo": "p1", "id": "insert1", "variant": "oracle", "distance_m": 1.0,
+                 "psnr_ldr": 30.0, "object_psnr_ldr": 30.0, "shadow_psnr_ldr": 30.0})
+    out = mod.mean_over_runs(recs, ["seed0", "seed1000"])
+    mean = {(r["variant"], r["id"]): r for r in out if "mean of 2 runs" in r["variant"]}
+    assert mean[("prior (mean of 2 runs)", "insert1")]["psnr_ldr"] == 22.0          # (21 + 23) / 2
+    assert mean[("prior-envmap (mean of 2 runs)", "insert2")]["object_psnr_ldr"] == 21.0
+    assert math.isnan(mean[("prior (mean of 2 runs)", "insert2")]["shadow_psnr_ldr"])
+    assert len(mean) == 4 and sum(r["variant"] == "oracle" for r in out) == 1
+    assert "| prior (mean of 2 runs) − prior-envmap (mean of 2 runs) | +1.00 [" in mod.table(out)
+    assert mod.mean_over_runs(recs, ["seed0"]) == recs
