@@ -54,10 +54,15 @@ def prepare_environment(busy: float | None = None) -> None:
 AUTO = "auto"
 
 
+def _requested(option: int | str | None) -> str:
+    """The thread request in force: ``option``, else ``$ROOMLIGHT_THREADS``, as text ('' when neither)."""
+    return str(option).strip() if option is not None else os.environ.get(ENV_THREADS, "").strip()
+
+
 def thread_count(option: int | str | None = None) -> int:
     """``option``, else ``$ROOMLIGHT_THREADS``, else :func:`available_cpus`; ``auto`` (either way) is
     :func:`measured_threads`, the CPUs less those other processes keep busy now."""
-    raw = str(option).strip() if option is not None else os.environ.get(ENV_THREADS, "").strip()
+    raw = _requested(option)
     if not raw:
         return available_cpus()
     if raw.lower() == AUTO:
@@ -88,7 +93,7 @@ def apply_thread_policy(option: int | str | None = None) -> int | None:
     and, with it, the order of torch's float reductions (a resumed training run would then differ from
     an uninterrupted one), and no earlier ``auto`` outlives its command.
     """
-    requested = str(option).strip() if option is not None else os.environ.get(ENV_THREADS, "").strip()
+    requested = _requested(option)
     if requested.lower() != AUTO:
         os.environ.pop(ENV_THREADS_AUTO, None)
     if not requested:

@@ -114,13 +114,17 @@ ENV_DETERMINISTIC = "ROOMLIGHT_DETERMINISTIC"
 ENV_PARALLEL_BACKWARD = "ROOMLIGHT_PARALLEL_BACKWARD"
 
 
+def _env_flag(name: str) -> bool:
+    """Whether the environment variable ``name`` is set to a yes (1, true, yes, on; any case)."""
+    return os.environ.get(name, "").strip().lower() in ("1", "true", "yes", "on")
+
+
 def serial_backward() -> bool:
     """Whether differentiable renders on the CPU run their adjoint pass on one Dr.Jit worker (the
     default): the primal render is bit-identical run to run with any number of workers, the adjoint
     is not (workers scatter-add gradients into shared texels in varying order), so serialising only
     the adjoint makes fits repeatable at a fraction of the cost of one worker throughout."""
-    return (ensure_variant().startswith("llvm")
-            and os.environ.get(ENV_PARALLEL_BACKWARD, "").strip().lower() not in ("1", "true", "yes", "on"))
+    return ensure_variant().startswith("llvm") and not _env_flag(ENV_PARALLEL_BACKWARD)
 
 
 def worker_count() -> int:
@@ -179,14 +183,14 @@ def thread_record() -> dict:
 
     cpu_variant = _active is not None and _active.startswith("llvm")
     return {"torch": int(torch.get_num_threads()), "mitsuba": worker_count() if cpu_variant else None,
-            "parallel_backward": os.environ.get(ENV_PARALLEL_BACKWARD, "").strip().lower() in ("1", "true", "yes", "on"),
+            "parallel_backward": _env_flag(ENV_PARALLEL_BACKWARD),
             "policy": "auto" if os.environ.get(ENV_THREADS_AUTO) == "1" else "fixed",
             "deterministic": deterministic()}
 
 
 def deterministic() -> bool:
     """Whether ``$ROOMLIGHT_DETERMINISTIC`` asks for bit-identical results (Dr.Jit on one CPU thread)."""
-    return os.environ.get(ENV_DETERMINISTIC, "").strip().lower() in ("1", "true", "yes", "on")
+    return _env_flag(ENV_DETERMINISTIC)
 
 
 def mitsuba():
