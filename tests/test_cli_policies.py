@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from helpers_cpu import spin_for
 from roomlight.cli.main import cli
 from roomlight.prior.data import write_toy_dataset
 from roomlight.errors import InputFileError
@@ -125,7 +126,7 @@ def test_own_cpu_time_matches_getrusage_and_a_busy_process_is_seen():
     used = (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime)
     assert used >= 0.39 and abs((t1 - t0) / hz - used) <= 2.5 / hz + 0.02
     ctx = multiprocessing.get_context("fork")
-    spinner = ctx.Process(target=_spin_for, args=(3.0,), daemon=True)
+    spinner = ctx.Process(target=spin_for, args=(3.0,), daemon=True)
     spinner.start()
     try:
         time.sleep(0.3)
@@ -133,14 +134,6 @@ def test_own_cpu_time_matches_getrusage_and_a_busy_process_is_seen():
     finally:
         spinner.terminate()
         spinner.join()
-
-
-def _spin_for(seconds: float) -> None:
-    import time
-
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end:
-        pass
 
 
 def test_the_recheck_follows_the_load_only_under_auto(monkeypatch):

@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from helpers_cpu import spin_for
+
 SRC = Path(__file__).parents[1] / "src"
 
 
@@ -97,14 +99,6 @@ def test_every_fitting_method_repeats_itself_bit_for_bit(tmp_path):
             assert np.array_equal(a.depth, b.depth), method
 
 
-def _spin(seconds: float) -> None:
-    import time
-
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end:
-        pass
-
-
 @pytest.mark.mitsuba
 @pytest.mark.slow
 def test_a_fit_beside_a_busy_process_repeats_the_fit_on_a_quieter_machine(tmp_path):
@@ -127,7 +121,7 @@ def test_a_fit_beside_a_busy_process_repeats_the_fit_on_a_quieter_machine(tmp_pa
         assert _numbers(tmp_path / "threads1") != _numbers(tmp_path / "threads2")
     quiet = _fit(case, tmp_path / "quiet", env_extra={"ROOMLIGHT_THREADS": ""})
     assert quiet.returncode == 0, quiet.stderr[-2000:]
-    spinner = multiprocessing.get_context("fork").Process(target=_spin, args=(600.0,), daemon=True)
+    spinner = multiprocessing.get_context("fork").Process(target=spin_for, args=(600.0,), daemon=True)
     spinner.start()
     try:
         busy = _fit(case, tmp_path / "busy", env_extra={"ROOMLIGHT_THREADS": ""})
