@@ -165,6 +165,12 @@ def test_fit_photo_writes_every_output(tmp_path):
     probes = json.loads((out / "probes.json").read_text())
     assert len(probes["sites"]) == 2 and probes["rows"] == ["prior", "direct-envmap"]
     assert "prior: best iteration" in r.output and "probes: 2 positions under 2 light(s)" in r.output
+    # how far the visible room pins the light's level: the range of the albedos over the range real ones span
+    level = res["level_bracket"]
+    q_lo, q_hi = level["albedo_quantiles"]
+    assert level["points"] > 0 and 0 < q_lo <= q_hi and level["trim"] == 0.1
+    assert (level["low"], level["high"]) == pytest.approx((q_hi / 0.9, q_lo / 0.03))
+    assert "prior: level: " in r.output
 
 
 def test_presets_are_ordered_by_work_and_named_in_help():

@@ -180,3 +180,31 @@ def test_the_texel_sum_and_its_gradient_equal_the_pair_by_pair_formula():
     g_ref = torch.autograd.grad(ref.square().sum(), (L, depth))
     for a, b in zip(g_got, g_ref):
         assert torch.allclose(a, b, rtol=1e-8, atol=1e-10)
+
+
+def test_the_level_bracket_is_the_trimmed_albedo_quantiles_over_the_range():
+    # Under an env map of uniform radiance L every point receives E = pi L, so a point showing a L has
+    # apparent albedo a: the bracket follows from the albedos by hand.
+    from roomlight.fitting.photo.room_albedo import level_bracket
+
+    L = torch.full((64, 128, 3), 0.4)
+    albedos = [0.05 * (i + 1) for i in range(11)]            # 0.05 ... 0.55
+    n = torch.tensor([[0.0, 1.0, 0.0]] * 12)
+    q = torch.zeros(12, 3)
+    obs = torch.tensor([[a * 0.4] * 3 for a in albedos] + [[1.0, 1.0, 1.0]])   # the last one saturated
+    room = RoomSurface(q, n, obs)
+    b = level_bracket(L, None, room, trim=0.1)
+    assert b["points"] == 11                                   # the saturated pixel takes no part
+    # Trimming a tenth at each end of 11 sorted values keeps the 2nd to the 10th: 0.10 and 0.50.
+    assert b["albedo_quantiles"] == pytest.approx([0.10, 0.50], rel=3e-3)
+    assert b["low"] == pytest.approx(0.50 / 0.9, rel=3e-3)    # brighter than this: the whitest below 0.9
+    assert b["high"] == pytest.approx(0.10 / 0.03, rel=3e-3)  # dimmer than this: the darkest above 0.03
+    # A light twice as bright allows half the factors.
+    b2 = level_bracket(2 * L, None, room, trim=0.1)
+    assert (b2["low"], b2["high"]) == pytest.approx((b["low"] / 2, b["high"] / 2), rel=1e-5)
+    # A room that needs a white above 0.9 and a black below 0.03 under one light: the bracket is empty.
+    wide = RoomSurface(torch.zeros(2, 3), n[:2], torch.tensor([[0.01 * 0.4] * 3, [0.95 * 0.4] * 3]))
+    e = level_bracket(L, None, wide, trim=0.0)
+    assert e["low"] > e["high"]
+    # Nothing unsaturated: no bracket.
+    assert level_bracket(L, None, RoomSurface(q[:1], n[:1], obs[-1:]), trim=0.1) is None

@@ -61,6 +61,7 @@ class PhotoFitConfig(FitConfig):
     room_albedo_range: tuple[float, float] = (0.03, 0.9)  #: the albedos the visible room's surfaces may have
     room_albedo_points: int = 512         #: visible room points the bound is checked at (a fixed random subset)
     room_albedo_trim: float = 0.1         #: share of those points breaking the bound most that are left out (lamps, screens)
+    level_bracket_trim: float = 0.1       #: share of the visible points left out at each end of the reported level bracket
     room_albedo_moves: str = "light"      #: what the bound may move: the whole light, or its exposure (its brightness) only
     shadow_receivers: bool = False        #: fit the surface each object stands on as a receiver of its shadow (fitting/photo/receivers.py)
     lambda_receivers: float = 1.0         #: weight of the receivers' image term
@@ -100,6 +101,7 @@ class PhotoFitConfig(FitConfig):
             (len(self.room_albedo_range) == 2 and 0 < self.room_albedo_range[0] < self.room_albedo_range[1],
              "room_albedo_range must be [lo, hi] with 0 < lo < hi"),
             (0 <= self.room_albedo_trim < 1, "room_albedo_trim must be in [0, 1)"),
+            (0 <= self.level_bracket_trim < 0.5, "level_bracket_trim must be in [0, 0.5)"),
             (self.room_albedo_moves in ("exposure", "light"), "room_albedo_moves must be exposure or light"),
             (self.lambda_receivers >= 0 and self.receiver_radius > 0, "lambda_receivers >= 0 and receiver_radius > 0"),
             (-1 <= self.receiver_min_up < 1, "receiver_min_up must be in [-1, 1)"),

@@ -35,7 +35,7 @@ from roomlight.fitting.photo.frustum import FrustumTarget, frustum_terms
 from roomlight.fitting.photo.geometry import PhotoGeometry, SceneTransform, build_geometry, level_transform
 from roomlight.fitting.photo.materials import ObjectMaterials
 from roomlight.fitting.photo.receivers import ShadowReceivers, shadow_receivers
-from roomlight.fitting.photo.room_albedo import RoomSurface, lifted, room_albedo_term
+from roomlight.fitting.photo.room_albedo import RoomSurface, level_bracket, lifted, room_albedo_term
 
 __all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
 
@@ -194,6 +194,8 @@ class PhotoFit:
         containment: for a 2.5D light, how many free-space and object points it had to enclose,
             whether the depth floor held them, and the share of each left outside (0 with the floor).
         receivers: the shadow receivers' geometry (:mod:`roomlight.fitting.photo.receivers`), or None.
+        level: the factors on the fitted light the visible room allows
+            (:func:`~roomlight.fitting.photo.room_albedo.level_bracket`), or None (no usable room points).
     """
 
     method: str
@@ -207,6 +209,7 @@ class PhotoFit:
     initial: dict = field(default_factory=dict)
     containment: dict = field(default_factory=dict)
     receivers: ShadowReceivers | None = None
+    level: dict | None = None
 
     @property
     def materials(self) -> ObjectMaterials:
@@ -363,7 +366,8 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     seen = mask if receiver_mask is None else mask | receiver_mask
     window = mask_window(seen) if config.crop_to_mask else None
     fitter = PhotoFitter(photo_model, escene, target, mask, points, config, sensor_dict=sensor, window=window,
-                         frustum=frustum, room=_room_surface(geometry, transform, config) if light_is_free else None,
+                         frustum=frustum, room=(_room_surface(geometry, transform, config.room_albedo_points, config.seed)
+                               if light_is_free and config.room_albedo > 0 else None),
                          receiver_mask=receiver_mask)
 
     out = Path(out_dir) if out_dir is not None else None
@@ -392,19 +396,23 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
             "objects_outside_share": outside_share(result.depth, torch.from_numpy(contained[1]))}
     else:
         containment = {}
+    room = _room_surface(geometry, transform)
+    level = None if room is None else level_bracket(result.radiance, result.depth, room, tuple(config.room_albedo_range),
+                                                    config.level_bracket_trim, config.tau)
     return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info, containment,
-                    shadow)
+                    shadow, level)
 
 
-def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig) -> RoomSurface | None:
-    """The visible room points the albedo bound is checked at (room frame): a fixed random subset of the
-    frustum observations whose depth map gives a reliable normal."""
+def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, limit: int | None = None,
+                  seed: int = 0) -> RoomSurface | None:
+    """The visible room's points (room frame): the frustum observations whose depth map gives a reliable
+    normal, all of them or a fixed random subset of ``limit`` (drawn with ``seed``)."""
     f = geometry.frustum
-    if config.room_albedo <= 0 or f.normals is None:
+    if f.normals is None:
         return None
     idx = np.flatnonzero(f.normal_ok)
-    if len(idx) > config.room_albedo_points:
-        idx = np.sort(np.random.default_rng(config.seed).choice(idx, config.room_albedo_points, replace=False))
+    if limit is not None and len(idx) > limit:
+        idx = np.sort(np.random.default_rng(seed).choice(idx, limit, replace=False))
     if not len(idx):
         return None
     pts = lifted(f.points[idx], f.normals[idx])   # off the surface, so its own wall's texels do not sit on it

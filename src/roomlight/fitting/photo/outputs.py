@@ -11,6 +11,7 @@ settings, timings). Every file is written under a temporary name and renamed int
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import time
@@ -59,6 +60,18 @@ def _srgb8(linear: np.ndarray) -> np.ndarray:
     from roomlight.core.color import linear_to_srgb
 
     return np.rint(linear_to_srgb(linear) * 255).astype(np.uint8)
+
+
+def level_note(level: dict) -> str:
+    """One line saying how far the visible room pins the fitted light's level (a ``level_bracket`` record)."""
+    lo, hi = level["low"], level["high"]
+    share = f"{1 - 2 * level['trim']:.0%} of the visible room's {level['points']} points"
+    if lo > hi:
+        return (f"level: no one scale of this light keeps {share} between black (0.03) and white (0.9); "
+                "its brightness is the fit's guess")
+    return (f"level: {share} stay between black (0.03) and white (0.9) for this light x{lo:.2f} to x{hi:.2f} "
+            f"({math.log2(hi / lo):.1f} stops); where in that range is the fit's guess "
+            "(`insert`/`export --reference-albedo` set it from an object of known albedo)")
 
 
 def light_view(fit, name: str | None = None):
@@ -163,6 +176,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "transform": fit.transform.to_dict(),
         "initial": fit.initial,
         "containment": fit.containment,
+        "level_bracket": fit.level,
         "inputs": inputs,
         "settings": config.to_dict(),
         "timings": timings,

@@ -39,7 +39,7 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
     """
     from roomlight.fitting.inverse.outputs import recorded_light_note
     from roomlight.core.light import Light
-    from roomlight.fitting.photo.outputs import atomic_write, light_view, write_fit_files
+    from roomlight.fitting.photo.outputs import atomic_write, level_note, light_view, write_fit_files
     from roomlight.fitting.photo.probes import LightView, choose_probe_sites, probe_figure, render_probes
 
     t_start = time.perf_counter()
@@ -53,6 +53,8 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
         (folder / STATE_FILE).unlink(missing_ok=True)  # finished: the outputs are the result
         say(f"{m}: best iteration {fit.result.best_iteration} (fixed-seed loss {fit.result.best_loss:.4g}) "
             f"in {fit.timings['fit']:.1f} s -> {folder}")
+        if fit.level is not None:
+            say(f"{m}: {level_note(fit.level)}")
         note = recorded_light_note(files["result"])
         if note:
             say(f"{m}: {note}")

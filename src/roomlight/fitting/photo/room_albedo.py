@@ -42,7 +42,7 @@ import torch
 from roomlight.core.geometry.equirect import pixel_directions, pixel_solid_angles
 
 __all__ = ["RoomSurface", "surface_normals", "lifted", "LIFT", "pool_emitter", "texel_patches", "irradiance",
-           "room_albedo_term", "apparent_albedo", "POOLED_HEIGHT"]
+           "room_albedo_term", "apparent_albedo", "level_bracket", "POOLED_HEIGHT"]
 
 #: The emitter is pooled to this many rows (twice as many columns) before the irradiance sum: the
 #: irradiance is a smooth function of the light, and 32 x 64 texels keep the sum at a few ms.
@@ -227,3 +227,34 @@ def room_albedo_term(radiance: torch.Tensor, depth: torch.Tensor | None, surface
     if n_keep < len(v):
         v = torch.sort(v).values[:max(n_keep, 1)]
     return v.mean()
+
+
+def level_bracket(radiance: torch.Tensor, depth: torch.Tensor | None, surface: RoomSurface,
+                  albedo_range=(0.03, 0.9), trim: float = 0.1, tau: float = 0.99) -> dict | None:
+    """How far the visible room pins the light's level: the factors k on the light it allows.
+
+    Scaling the light by k divides every visible point's apparent albedo by k. The factors that keep the
+    central share of the unsaturated points (all but ``trim`` at each end: lamps, screens, points in a
+    shadow the sum does not trace) inside ``albedo_range`` are
+
+        q_hi / hi  <=  k  <=  q_lo / lo,     q_lo, q_hi: the trim and 1 - trim quantiles.
+
+    Args:
+        radiance, depth, surface: as in :func:`apparent_albedo` (the fitted light, the visible room).
+        albedo_range: (lo, hi) the albedos real surfaces span.
+        trim: share of the points left out at each end.
+        tau: a point whose photo pixel reaches tau in any channel is saturated and left out.
+    Returns:
+        {"low": k_min, "high": k_max, "points": count, "trim": trim, "albedo_quantiles": [q_lo, q_hi]}
+        (low > high: no one level keeps those points inside the range), or None without unsaturated points.
+    """
+    keep = surface.radiance.amax(-1) < tau
+    if not bool(keep.any()):
+        return None
+    sub = RoomSurface(surface.points[keep], surface.normals[keep], surface.radiance[keep])
+    with torch.no_grad():
+        a = apparent_albedo(radiance.detach(), None if depth is None else depth.detach(), sub)
+    q_lo, q_hi = (float(v) for v in torch.quantile(a.double().cpu(), torch.tensor([trim, 1 - trim], dtype=torch.float64)))
+    lo, hi = (float(v) for v in albedo_range)
+    return {"low": q_hi / hi, "high": q_lo / lo, "points": int(len(a)), "trim": float(trim),
+            "albedo_quantiles": [q_lo, q_hi]}
