@@ -78,11 +78,13 @@ def apparent_albedos(light, surface_cam, intrinsics, trim: float = 0.1) -> dict:
     unseen = ~_seen_in_camera(pos.numpy().astype(np.float64), frame, intrinsics)
     bracket = level_bracket(light.radiance, light.depth, surface, trim=trim)
     return {"seen": float(np.median(seen)), "unseen": float(np.median(texel_albedo[unseen])),
-            "texels": int(unseen.sum()), "bracket": [bracket["low"], bracket["high"]]}
+            "texels": int(unseen.sum()),
+            "bracket": [bracket["low"], bracket["high"]] if bracket else [float("nan"), float("nan")]}
 
 
 def visible_room(case_dir: Path):
-    """The photograph's unsaturated background points with reliable normals, camera frame."""
+    """The photograph's unsaturated background points with reliable normals, camera frame (the geometry of
+    the ``fast`` preset, the benchmark runs' own)."""
     from roomlight.fitting.photo.case import load_photo
     from roomlight.fitting.photo.config import photo_config
     from roomlight.fitting.photo.geometry import build_geometry
@@ -162,15 +164,16 @@ def main(argv=None) -> int:
         need = 1.0 / r["level"]
         held_true.append(t0 <= 1.0 <= t1)
         held_fit.append(f0 <= need <= f1)
-        empty += f0 > f1
-        if f0 <= f1:
+        usable = 0 < f0 <= f1          # False for an empty range, one collapsed to 0, or none (nan)
+        empty += not usable
+        if usable:
             widths.append(math.log2(f1 / f0))
         print(f"{r['set']:<{w}}{r['photo']:<13}{f'{t0:.2f} .. {t1:.2f}':>16}{'yes' if held_true[-1] else 'no':>9}"
               f"{f'{f0:.2f} .. {f1:.2f}':>16}{need:10.2f}{'yes' if held_fit[-1] else 'no':>8}"
-              f"{(f'{math.log2(f1 / f0):.2f}' if f0 <= f1 else 'empty'):>15}")
+              f"{(f'{math.log2(f1 / f0):.2f}' if usable else 'empty'):>15}")
     n = len(rows)
     print(f"\nunder the true light the bracket holds k = 1 on {sum(held_true)}/{n} photos; under the fitted light it "
-          f"holds the needed factor on {sum(held_fit)}/{n}, is empty on {empty}/{n}; median width "
+          f"holds the needed factor on {sum(held_fit)}/{n}, is empty (or none) on {empty}/{n}; median width "
           f"{(float(np.median(widths)) if widths else float('nan')):.2f} stops")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))

@@ -171,6 +171,24 @@ def test_fit_photo_writes_every_output(tmp_path):
     assert level["points"] > 0 and 0 < q_lo <= q_hi and level["trim"] == 0.1
     assert (level["low"], level["high"]) == pytest.approx((q_hi / 0.9, q_lo / 0.03))
     assert "prior: level: " in r.output
+    # ... recomputed from the written files (the panorama, the case, the recorded transform and settings),
+    # so a wrong frame, a missing exposure or another set of points shows
+    import torch
+    from roomlight.fitting.photo import load_photo
+    from roomlight.fitting.photo.config import PhotoFitConfig
+    from roomlight.fitting.photo.geometry import SceneTransform, build_geometry
+    from roomlight.fitting.photo.room_albedo import RoomSurface, apparent_albedo, lifted
+
+    config = PhotoFitConfig(**{k: tuple(v) if isinstance(v, list) else v for k, v in res["settings"].items()})
+    f = build_geometry(load_photo(tmp_path / "case"), config).frustum
+    t = res["transform"]
+    to_room = SceneTransform(np.array(t["rotation"]), t["scale"], np.array(t["translation"]))
+    ok = f.normal_ok & (f.radiance.max(-1) < config.tau) & (f.radiance.max(-1) > 0)
+    room = RoomSurface(to_room.points(lifted(f.points[ok], f.normals[ok])), to_room.directions(f.normals[ok]),
+                       f.radiance[ok])
+    a = apparent_albedo(torch.from_numpy(pano.radiance).float(), torch.from_numpy(pano.depth).float(), room).numpy()
+    assert level["points"] == len(a)
+    assert level["albedo_quantiles"] == pytest.approx(np.quantile(a, [0.1, 0.9]), rel=1e-4)
 
 
 def test_presets_are_ordered_by_work_and_named_in_help():

@@ -190,11 +190,13 @@ def test_the_level_bracket_is_the_trimmed_albedo_quantiles_over_the_range():
     L = torch.full((64, 128, 3), 0.4)
     albedos = [0.05 * (i + 1) for i in range(11)]            # 0.05 ... 0.55
     n = torch.tensor([[0.0, 1.0, 0.0]] * 12)
-    q = torch.zeros(12, 3)
-    obs = torch.tensor([[a * 0.4] * 3 for a in albedos] + [[1.0, 1.0, 1.0]])   # the last one saturated
+    n = torch.tensor([[0.0, 1.0, 0.0]] * 13)
+    q = torch.zeros(13, 3)
+    # the last two: saturated (only a lower bound) and black (only an upper bound)
+    obs = torch.tensor([[a * 0.4] * 3 for a in albedos] + [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]])
     room = RoomSurface(q, n, obs)
     b = level_bracket(L, None, room, trim=0.1)
-    assert b["points"] == 11                                   # the saturated pixel takes no part
+    assert b["points"] == 11 and b["albedo_range"] == [0.03, 0.9]   # neither censored pixel takes part
     # Trimming a tenth at each end of 11 sorted values keeps the 2nd to the 10th: 0.10 and 0.50.
     assert b["albedo_quantiles"] == pytest.approx([0.10, 0.50], rel=3e-3)
     assert b["low"] == pytest.approx(0.50 / 0.9, rel=3e-3)    # brighter than this: the whitest below 0.9
@@ -207,4 +209,19 @@ def test_the_level_bracket_is_the_trimmed_albedo_quantiles_over_the_range():
     e = level_bracket(L, None, wide, trim=0.0)
     assert e["low"] > e["high"]
     # Nothing unsaturated: no bracket.
-    assert level_bracket(L, None, RoomSurface(q[:1], n[:1], obs[-1:]), trim=0.1) is None
+    assert level_bracket(L, None, RoomSurface(q[:2], n[:2], obs[-2:]), trim=0.1) is None
+
+
+def test_the_level_line_says_whether_the_fitted_light_is_inside_its_bracket():
+    from roomlight.fitting.photo.outputs import level_note
+
+    record = {"points": 900, "trim": 0.1, "albedo_range": [0.03, 0.9]}
+    inside = level_note({**record, "low": 0.5, "high": 2.0})
+    assert "x0.50 to x2.00 (2.0 stops)" in inside and "the fitted level lies inside" in inside
+    assert "80% of the visible room's 900 measured points" in inside
+    assert "dimmer than that allows" in level_note({**record, "low": 1.3, "high": 4.0})
+    assert "brighter than that allows" in level_note({**record, "low": 0.2, "high": 0.8})
+    assert "(0.05) and white (0.8)" in level_note({**record, "albedo_range": [0.05, 0.8], "low": 0.5, "high": 2.0})
+    # empty, or collapsed to nothing by black points: no range, and no division by zero
+    for low, high in ((3.0, 2.0), (0.0, 0.0)):
+        assert "no one scale of this light" in level_note({**record, "low": low, "high": high})

@@ -194,7 +194,7 @@ class PhotoFit:
         containment: for a 2.5D light, how many free-space and object points it had to enclose,
             whether the depth floor held them, and the share of each left outside (0 with the floor).
         receivers: the shadow receivers' geometry (:mod:`roomlight.fitting.photo.receivers`), or None.
-        level: the factors on the fitted light the visible room allows
+        level_bracket: the factors on the fitted light the visible room allows
             (:func:`~roomlight.fitting.photo.room_albedo.level_bracket`), or None (no usable room points).
     """
 
@@ -209,7 +209,7 @@ class PhotoFit:
     initial: dict = field(default_factory=dict)
     containment: dict = field(default_factory=dict)
     receivers: ShadowReceivers | None = None
-    level: dict | None = None
+    level_bracket: dict | None = None
 
     @property
     def materials(self) -> ObjectMaterials:
@@ -397,16 +397,18 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
     else:
         containment = {}
     room = _room_surface(geometry, transform)
-    level = None if room is None else level_bracket(result.radiance, result.depth, room, tuple(config.room_albedo_range),
-                                                    config.level_bracket_trim, config.tau)
+    bracket = None if room is None else level_bracket(result.radiance, result.depth, room,
+                                                      tuple(config.room_albedo_range), config.level_bracket_trim,
+                                                      config.tau)
     return PhotoFit(method, result, photo_model, fitter, geometry, transform, objective, timings, info, containment,
-                    shadow, level)
+                    shadow, bracket)
 
 
 def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, limit: int | None = None,
                   seed: int = 0) -> RoomSurface | None:
-    """The visible room's points (room frame): the frustum observations whose depth map gives a reliable
-    normal, all of them or a fixed random subset of ``limit`` (drawn with ``seed``)."""
+    """The visible room's points (room frame): the frustum samples (already at most ``frustum_pixels``) whose
+    depth map gives a reliable normal, all of them or a fixed random subset of ``limit`` (drawn with
+    ``seed``)."""
     f = geometry.frustum
     if f.normals is None:
         return None

@@ -63,15 +63,19 @@ def _srgb8(linear: np.ndarray) -> np.ndarray:
 
 
 def level_note(level: dict) -> str:
-    """One line saying how far the visible room pins the fitted light's level (a ``level_bracket`` record)."""
+    """One line saying how far the visible room pins the fitted light's level (a ``level_bracket`` record,
+    :func:`~roomlight.fitting.photo.room_albedo.level_bracket`)."""
     lo, hi = level["low"], level["high"]
-    share = f"{1 - 2 * level['trim']:.0%} of the visible room's {level['points']} points"
-    if lo > hi:
-        return (f"level: no one scale of this light keeps {share} between black (0.03) and white (0.9); "
+    black, white = level.get("albedo_range", (0.03, 0.9))
+    share = f"{1 - 2 * level['trim']:.0%} of the visible room's {level['points']} measured points"
+    if not (0 < lo <= hi):
+        return (f"level: no one scale of this light keeps {share} between black ({black:g}) and white ({white:g}); "
                 "its brightness is the fit's guess")
-    return (f"level: {share} stay between black (0.03) and white (0.9) for this light x{lo:.2f} to x{hi:.2f} "
-            f"({math.log2(hi / lo):.1f} stops); where in that range is the fit's guess "
-            "(`insert`/`export --reference-albedo` set it from an object of known albedo)")
+    where = ("the fitted level lies inside" if lo <= 1 <= hi else
+             f"the fitted light is {'dimmer' if lo > 1 else 'brighter'} than that allows")
+    return (f"level: {share} stay between black ({black:g}) and white ({white:g}) with this light x{lo:.2f} to "
+            f"x{hi:.2f} ({math.log2(hi / lo):.1f} stops); {where}. The photograph does not say where in that "
+            "range the truth is (`insert`/`export --reference-albedo` set the level from an object of known albedo)")
 
 
 def light_view(fit, name: str | None = None):
@@ -176,7 +180,7 @@ def write_fit_files(out, fit, case, config, extra: dict | None = None) -> dict[s
         "transform": fit.transform.to_dict(),
         "initial": fit.initial,
         "containment": fit.containment,
-        "level_bracket": fit.level,
+        "level_bracket": fit.level_bracket,
         "inputs": inputs,
         "settings": config.to_dict(),
         "timings": timings,

@@ -53,8 +53,8 @@ def run_photo(case, method: str, config: PhotoFitConfig, out, model=None, compar
         (folder / STATE_FILE).unlink(missing_ok=True)  # finished: the outputs are the result
         say(f"{m}: best iteration {fit.result.best_iteration} (fixed-seed loss {fit.result.best_loss:.4g}) "
             f"in {fit.timings['fit']:.1f} s -> {folder}")
-        if fit.level is not None:
-            say(f"{m}: {level_note(fit.level)}")
+        if fit.level_bracket is not None:
+            say(f"{m}: {level_note(fit.level_bracket)}")
         note = recorded_light_note(files["result"])
         if note:
             say(f"{m}: {note}")

@@ -234,21 +234,28 @@ def level_bracket(radiance: torch.Tensor, depth: torch.Tensor | None, surface: R
     """How far the visible room pins the light's level: the factors k on the light it allows.
 
     Scaling the light by k divides every visible point's apparent albedo by k. The factors that keep the
-    central share of the unsaturated points (all but ``trim`` at each end: lamps, screens, points in a
+    central share of the measured points (all but ``trim`` at each end: lamps, screens, points in a
     shadow the sum does not trace) inside ``albedo_range`` are
 
         q_hi / hi  <=  k  <=  q_lo / lo,     q_lo, q_hi: the trim and 1 - trim quantiles.
 
+    A point is measured when its photo pixel is neither saturated (a channel at ``tau`` or above: its
+    radiance is only a lower bound) nor black (every channel at 0: only an upper bound).
+
     Args:
-        radiance, depth, surface: as in :func:`apparent_albedo` (the fitted light, the visible room).
+        radiance: (H, W, 3) the light's linear radiance, W = 2 H, its exposure applied (the fitted light).
+        depth: (H, W) its radial depth in metres, or None for an env map.
+        surface: the visible room's points, in the light's frame (:class:`RoomSurface`).
         albedo_range: (lo, hi) the albedos real surfaces span.
         trim: share of the points left out at each end.
-        tau: a point whose photo pixel reaches tau in any channel is saturated and left out.
+        tau: the saturation level of the photograph.
     Returns:
-        {"low": k_min, "high": k_max, "points": count, "trim": trim, "albedo_quantiles": [q_lo, q_hi]}
-        (low > high: no one level keeps those points inside the range), or None without unsaturated points.
+        {"low": k_min, "high": k_max (dimensionless factors on the light's radiance), "points": measured
+        points, "trim": trim, "albedo_range": [lo, hi], "albedo_quantiles": [q_lo, q_hi] under this light}
+        (low > high: no one factor keeps those points inside the range), or None without a measured point.
     """
-    keep = surface.radiance.amax(-1) < tau
+    peak = surface.radiance.amax(-1)
+    keep = (peak < tau) & (peak > 0)
     if not bool(keep.any()):
         return None
     sub = RoomSurface(surface.points[keep], surface.normals[keep], surface.radiance[keep])
@@ -257,4 +264,4 @@ def level_bracket(radiance: torch.Tensor, depth: torch.Tensor | None, surface: R
     q_lo, q_hi = (float(v) for v in torch.quantile(a.double().cpu(), torch.tensor([trim, 1 - trim], dtype=torch.float64)))
     lo, hi = (float(v) for v in albedo_range)
     return {"low": q_hi / hi, "high": q_lo / lo, "points": int(len(a)), "trim": float(trim),
-            "albedo_quantiles": [q_lo, q_hi]}
+            "albedo_range": [lo, hi], "albedo_quantiles": [q_lo, q_hi]}
