@@ -50,6 +50,28 @@ def test_the_wide_palette_spans_black_to_white_and_saturated_colours():
     assert min(m.roughness for m in mats) < 0.06
 
 
+def test_real_metal_colours_give_every_metal_a_real_metal_s_reflectance_and_change_nothing_else():
+    from roomlight.evaluation.photobench.objects import REAL_METALS
+
+    a, b = np.random.default_rng(5), np.random.default_rng(5)
+    drawn = [draw_material(a, 0.3, (0.05, 0.8), "wide") for _ in range(400)]
+    real = [draw_material(b, 0.3, (0.05, 0.8), "wide", "real") for _ in range(400)]
+    first = next(k for k, m in enumerate(drawn) if m.metallic)
+    assert drawn[:first] == real[:first]          # the same draws up to the first metal
+    assert (real[first].roughness, real[first].metallic) == (drawn[first].roughness, 1.0)
+    metals = [m for m in real if m.metallic]
+    assert len(metals) > 80 and all(m.albedo in REAL_METALS.values() for m in metals)
+    assert len({m.albedo for m in metals}) == len(REAL_METALS)   # every metal of the table drawn
+    # none darker than about half the light, none of the suite's dark "metals"
+    assert min(np.mean(m.albedo) for m in metals) > 0.45
+    assert sum(np.mean(m.albedo) < 0.45 for m in drawn if m.metallic) > 40
+    # the setting reaches the suite's scene settings only when it is not the default
+    assert "metal_colours" not in suite_config("wide").scene_settings()
+    assert suite_config("wide", metal_colours="real").scene_settings()["metal_colours"] == "real"
+    with pytest.raises(RoomlightError, match="metal_colours must be one of as-drawn, real"):
+        suite_config("wide", metal_colours="shiny")
+
+
 def test_a_room_without_any_light_is_no_kind_of_room():
     """Seed 700201908's room is small and has neither a lamp nor a window: the wide suite must not
     photograph it (it did once, and the photo was black)."""

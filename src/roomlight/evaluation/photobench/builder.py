@@ -256,7 +256,7 @@ def build_photo(index: int, out_dir, config: PhotoBenchConfig, captured_lights=N
         inserts, strata = stage_stratified_inserts(scenes, meshes, cam, config.inserts, insert_rng, occupied, config)
     else:
         inserts = stage_inserts(st.probes, config.inserts, insert_rng, config.metal_fraction, config.roughness,
-                                palette(config))
+                                palette(config), config.metal_colours)
     if inserts:  # the photo's scene with the new objects, with the photo's seed: elsewhere the photo itself
         insert_image, insert_labels = render_insert_truth(scenes, meshes, inserts, cam, config.spp, seeds["photo"],
                                                           config.supersample, k)

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 from roomlight.core.color import MIDDLE_GREY
 from roomlight.core.config import StrictConfig
 from roomlight.errors import RoomlightError
+from roomlight.evaluation.photobench.objects import METAL_COLOURS
 
 __all__ = ["PhotoBenchConfig", "DEPTH_FIELDS", "INSERT_FIELDS", "SUITES", "INSERT_PLACEMENTS", "INSERT_STRATA", "suite_config"]
 
@@ -21,7 +22,7 @@ INSERT_FIELDS = ("insert_spp",)
 #: The photo suites: the generator's own rooms and cameras, and the wide suite (photobench.variety).
 SUITES = ("rooms", "wide")
 _WIDE_DEFAULTS = {"suite": "rooms", "fov_range": None, "pitch_range": None, "captured_every": 0,
-                  "insert_placement": "probes"}
+                  "insert_placement": "probes", "metal_colours": "as-drawn"}
 #: Where the inserted objects go: at the probes (where the reference light is captured) or spread over the
 #: visible surfaces by distance (near, middle, far) and height (raised: a table top, a shelf).
 INSERT_PLACEMENTS = ("probes", "stratified")
@@ -52,6 +53,7 @@ class PhotoBenchConfig(StrictConfig):
     object_size: tuple[float, float] = (0.05, 0.08)      #: object bounding radius / its distance to the camera
     probe_size: float = 0.045                            #: probe radius / its distance to the camera
     metal_fraction: float = 0.3                          #: chance that an object is a metal (metallic 1)
+    metal_colours: str = "as-drawn"                      #: a metal's base colour: as drawn (any albedo) or a real metal's
     roughness: tuple[float, float] = (0.15, 0.8)         #: object roughness range
     min_pixels: int = 24                                 #: whole pixels each object and probe must show
     key: float = MIDDLE_GREY                             #: exposure key: the frame's log-average luminance
@@ -87,6 +89,7 @@ class PhotoBenchConfig(StrictConfig):
                   (0.0 < self.object_size[0] <= self.object_size[1] < 0.5, "object_size must be in (0, 0.5)"),
                   (0.0 < self.probe_size < 0.5, "probe_size must be in (0, 0.5)"),
                   (0.0 <= self.metal_fraction <= 1.0, "metal_fraction must be in [0, 1]"),
+                  (self.metal_colours in METAL_COLOURS, f"metal_colours must be one of {', '.join(METAL_COLOURS)}"),
                   (0.0 <= self.roughness[0] <= self.roughness[1] <= 1.0, "roughness must be a range in [0, 1]"),
                   (self.key > 0.0, "--key must be positive"),
                   (self.oracle_height >= 4, "oracle_height must be at least 4"),

@@ -49,13 +49,14 @@ _GAP = 0.002  # the probes' hover above their support (roomlight.evaluation.phot
 
 
 def stage_inserts(probes: list[ProbeSphere], count: int, rng: np.random.Generator, metal_fraction: float = 0.3,
-                  roughness=(0.15, 0.8), palette: str = "hsv") -> list[InsertedObject]:
-    """``count`` new objects at the first probe positions, each resting on its probe's support."""
+                  roughness=(0.15, 0.8), palette: str = "hsv", metal_colours: str = "as-drawn") -> list[InsertedObject]:
+    """``count`` new objects at the first probe positions, each resting on its probe's support (materials
+    from :func:`~roomlight.evaluation.photobench.objects.draw_material`)."""
     out = []
     for k, p in enumerate(probes[:count]):
         shape = INSERT_SHAPES[int(rng.integers(len(INSERT_SHAPES)))]
         yaw = float(rng.uniform(0.0, 360.0))
-        material = draw_material(rng, metal_fraction, tuple(roughness), palette)
+        material = draw_material(rng, metal_fraction, tuple(roughness), palette, metal_colours)
         probe_obj = InsertedObject(f"insert{k + 1}", INSERT_LABEL0 + k, shape, (float(p.radius),), yaw, (0.0, 0.0, 0.0),
                                    material)
         v, _ = probe_obj.local_geometry()
@@ -103,7 +104,7 @@ def stage_stratified_inserts(scenes, photo_meshes: dict, camera, count: int, rng
             k = len(out)
             obj = InsertedObject(f"insert{k + 1}", INSERT_LABEL0 + k, INSERT_SHAPES[int(rng.integers(len(INSERT_SHAPES)))],
                                  (radius,), float(rng.uniform(0.0, 360.0)), (0.0, 0.0, 0.0),
-                                 draw_material(rng, config.metal_fraction, tuple(config.roughness), palette(config)))
+                                 draw_material(rng, config.metal_fraction, tuple(config.roughness), palette(config), config.metal_colours))
             v, _ = obj.local_geometry()
             rho = float(np.max(np.hypot(v[:, 0], v[:, 2])))
             height = float(v[:, 1].max() - v[:, 1].min())

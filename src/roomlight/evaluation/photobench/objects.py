@@ -76,14 +76,31 @@ class PrincipledMaterial:
         return cls(tuple(float(c) for c in d["albedo"]), float(d["roughness"]), float(d["metallic"]))
 
 
+#: Reflectance at normal incidence (F0, linear RGB) of pure metals: a metal's base colour in a principled
+#: BSDF. Every one reflects at least about half the light; a "metal" darker than that is optically a
+#: glossy surface of that reflectance, which no real metal is.
+REAL_METALS = {
+    "silver": (0.95, 0.93, 0.88), "aluminium": (0.91, 0.92, 0.92), "gold": (1.00, 0.71, 0.29),
+    "copper": (0.95, 0.64, 0.54), "iron": (0.56, 0.57, 0.58), "chromium": (0.55, 0.56, 0.55),
+    "titanium": (0.54, 0.50, 0.45), "nickel": (0.66, 0.61, 0.53), "platinum": (0.67, 0.64, 0.59),
+    "zinc": (0.66, 0.82, 0.85),
+}
+
+#: How a metal's base colour is drawn (:func:`draw_material`).
+METAL_COLOURS = ("as-drawn", "real")
+
+
 def draw_material(rng: np.random.Generator, metal_fraction: float = 0.3,
-                  roughness_range=(0.15, 0.8), palette: str = "hsv") -> PrincipledMaterial:
+                  roughness_range=(0.15, 0.8), palette: str = "hsv", metal_colours: str = "as-drawn") -> PrincipledMaterial:
     """A random material, roughness uniform in ``roughness_range``, metallic 1 with probability
     ``metal_fraction`` and 0 otherwise (real surfaces are rarely in between).
 
     ``palette``: ``hsv`` (the original suite's): hue uniform, saturation 0-0.8, value 0.3-0.95 in
     sRGB-encoded HSV (linearised); ``wide`` (the wide suite's, the whole range of real surfaces): white
     (0.85-0.9), black (0.03-0.05), a saturated colour, or a grey log-uniform in 0.03-0.9, a quarter each.
+    ``metal_colours``: ``as-drawn`` (both suites'): a metal keeps the base colour drawn from the palette,
+    however dark; ``real``: a metal's base colour is a real metal's F0 (:data:`REAL_METALS`, one drawn
+    uniformly). The draws before a metal's are the same either way.
     """
     from roomlight.datagen.synth.color import hsv_albedo
 
@@ -104,6 +121,11 @@ def draw_material(rng: np.random.Generator, metal_fraction: float = 0.3,
         raise ValueError(f"draw_material: unknown palette {palette!r}")
     roughness = float(rng.uniform(*roughness_range))
     metallic = 1.0 if rng.uniform() < metal_fraction else 0.0
+    if metal_colours not in METAL_COLOURS:
+        raise ValueError(f"draw_material: unknown metal_colours {metal_colours!r}")
+    if metallic and metal_colours == "real":
+        names = sorted(REAL_METALS)
+        albedo = REAL_METALS[names[int(rng.integers(len(names)))]]
     return PrincipledMaterial(tuple(float(c) for c in albedo), roughness, metallic)
 
 

@@ -173,7 +173,7 @@ def _place_objects(caster, camera, supports, target, rng, config: PhotoBenchConf
             size = (radius,)
         k = len(placed) + 1
         obj = InsertedObject(f"obj{k}", k, shape, size, float(rng.uniform(0, 360)), (0.0, 0.0, 0.0),
-                             draw_material(rng, config.metal_fraction, config.roughness, palette(config)))
+                             draw_material(rng, config.metal_fraction, config.roughness, palette(config), config.metal_colours))
         v, _ = obj.local_geometry()
         rho = float(np.max(np.hypot(v[:, 0], v[:, 2])))
         h = float(v[:, 1].max() - v[:, 1].min())
