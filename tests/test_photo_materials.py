@@ -4,6 +4,7 @@ against finite differences, the metals' exemption, and the settings that refuse 
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 import torch
@@ -102,12 +103,14 @@ def test_photo_model_adds_the_weighted_prior_to_the_light_regularizers():
     ("albedo_prior_mean", 0.0, "albedo_prior_mean must be in (0, 1)"),
     ("albedo_prior_mean", 1.0, "albedo_prior_mean must be in (0, 1)"),
     ("albedo_prior_average", "median", "albedo_prior_average must be geometric or arithmetic"),
+    ("metal_band", -1.0, "metal_band must be >= 0"),
+    ("metal_band_range", (0.5, 0.2), "metal_band_range must be [lo, hi] with 0 < lo < hi < 1"),
 ])
 def test_bad_prior_settings_are_refused(field, value, message):
     from roomlight.errors import RoomlightError
     from roomlight.fitting.photo import photo_config
 
-    with pytest.raises(RoomlightError, match=message.replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(RoomlightError, match=re.escape(message)):
         photo_config("fast", **{field: value}).validate()
 
 
@@ -149,3 +152,53 @@ def test_an_albedo_range_holds_every_albedo_inside_it_and_starts_at_half():
     assert torch.equal(plain.values(), full.values()) and not full.bounded
     with pytest.raises(Exception, match="albedo_range"):
         ObjectMaterials([1], albedo_range=(0.6, 0.9))
+
+
+def test_the_metal_band_penalises_only_metals_between_a_clear_coat_and_a_real_metal():
+    """Worked by hand with the band (0.06, 0.45): a metal of mean albedo 0.2 is ln(0.2/0.06) from the
+    lower edge and ln(0.45/0.2) from the upper one, the shorter counts; a half-metallic object counts
+    half; a dielectric, a metal at 0.03 (a black glossy surface) and one at 0.9 (silver) count nothing."""
+    inside = min(math.log(0.2 / 0.06), math.log(0.45 / 0.2))
+    m = _materials([(0.2, 0.2, 0.2), (0.1, 0.2, 0.3), (0.2, 0.2, 0.2), (0.03, 0.03, 0.03), (0.9, 0.9, 0.9)],
+                   [1.0, 0.5, 0.0, 1.0, 1.0])
+    value = float(m.metal_band_term((0.06, 0.45)).detach())
+    # metallic 1 is stored as 1 - 1e-6 and 0 as 1e-6
+    assert value == pytest.approx((inside ** 2 + 0.5 * inside ** 2) / 5, rel=1e-5)
+    assert float(_materials([(0.3, 0.3, 0.3)], [1.0]).metal_band_term((0.06, 0.45)).detach()) == \
+        pytest.approx(math.log(0.45 / 0.3) ** 2, rel=1e-5)
+
+
+def test_the_metal_band_gradient_matches_finite_differences_and_reaches_the_metallic_value():
+    m = _materials([(0.15, 0.25, 0.2), (0.5, 0.4, 0.42), (0.08, 0.05, 0.06)], [0.8, 0.6, 0.9])
+    m.logits.data = m.logits.data.double()
+    m.metal_band_term((0.06, 0.45)).backward()
+    grad = m.logits.grad.clone()
+    eps = 1e-6
+    for k in range(3):
+        for c in (0, 1, 2, 4):
+            with torch.no_grad():
+                m.logits[k, c] += eps
+                up = float(m.metal_band_term((0.06, 0.45)).detach())
+                m.logits[k, c] -= 2 * eps
+                down = float(m.metal_band_term((0.06, 0.45)).detach())
+                m.logits[k, c] += eps
+            assert float(grad[k, c]) == pytest.approx((up - down) / (2 * eps), rel=1e-5, abs=1e-9)
+    # the first (mean 0.2, nearer 0.45 in log) is pushed up, and towards a dielectric
+    assert float(grad[0, :3].sum()) < 0 and float(grad[0, 4]) > 0
+    assert float(grad[:, 3].abs().max()) == 0.0   # roughness plays no part
+
+
+def test_photo_model_adds_the_metal_band_only_when_asked():
+    from roomlight.fitting.inverse.lights import LightModel
+    from roomlight.fitting.photo.fitter import PhotoModel
+
+    class Bare(LightModel):
+        kind = "envmap"
+
+        def regularizers(self):
+            return {}
+
+    m = _materials([(0.3, 0.3, 0.3)], [1.0])
+    terms = PhotoModel(Bare(), m, metal_band=2.0, metal_band_range=(0.06, 0.45)).regularizers()
+    assert float(terms["metal_band"].detach()) == pytest.approx(2.0 * math.log(0.45 / 0.3) ** 2, rel=1e-5)
+    assert "metal_band" not in PhotoModel(Bare(), m).regularizers()

@@ -57,6 +57,8 @@ class PhotoFitConfig(FitConfig):
     albedo_prior_mean: float = 0.3        #: the typical mean albedo over R, G, B that prior is centred on
     albedo_prior_average: str = "arithmetic"  #: which mean over R, G, B it holds: arithmetic or geometric (see docs/photo.md)
     albedo_range: tuple[float, float] = (0.0, 1.0)  #: the objects' albedo is held inside this range ((0.03, 0.9): real surfaces')
+    metal_band: float = 0.0               #: weight of the real-metal bound: no metal's mean albedo inside metal_band_range (0 = off)
+    metal_band_range: tuple[float, float] = (0.06, 0.45)  #: mean albedos no real metal has (above a clear coat's, below any pure metal's)
     room_albedo: float = 1.0              #: weight of the visible room's albedo bound (fitting/photo/room_albedo.py; 0 = off)
     room_albedo_range: tuple[float, float] = (0.03, 0.9)  #: the albedos the visible room's surfaces may have
     room_albedo_points: int = 512         #: visible room points the bound is checked at (a fixed random subset)
@@ -94,6 +96,9 @@ class PhotoFitConfig(FitConfig):
             (self.probe_count >= 0 and self.probe_resolution >= 8, "probe_count >= 0 and probe_resolution >= 8"),
             (0 < self.probe_size < 1, "probe_size must be in (0, 1)"),
             (self.albedo_prior >= 0, "albedo_prior must be >= 0"),
+            (self.metal_band >= 0, "metal_band must be >= 0"),
+            (len(self.metal_band_range) == 2 and 0 < self.metal_band_range[0] < self.metal_band_range[1] < 1,
+             "metal_band_range must be [lo, hi] with 0 < lo < hi < 1"),
             (0 < self.albedo_prior_mean < 1, "albedo_prior_mean must be in (0, 1)"),
             (self.albedo_prior_average in ("geometric", "arithmetic"),
              "albedo_prior_average must be geometric or arithmetic"),

@@ -58,11 +58,14 @@ class PhotoModel(LightModel):
         albedo_prior_mean: the typical mean albedo that prior is centred on.
         albedo_prior_average: the mean over R, G, B it holds, ``geometric`` or ``arithmetic``.
         receivers: the shadow receivers' materials (:mod:`roomlight.fitting.photo.receivers`), or None.
+        metal_band: weight of the real-metal bound (:meth:`ObjectMaterials.metal_band_term`); 0 leaves it out.
+        metal_band_range: the mean albedos (lo, hi) no real metal has.
     """
 
     def __init__(self, light: LightModel, materials: ObjectMaterials, albedo_prior: float = 0.0,
                  albedo_prior_mean: float = 0.3, albedo_prior_average: str = "arithmetic",
-                 receivers: ObjectMaterials | None = None):
+                 receivers: ObjectMaterials | None = None, metal_band: float = 0.0,
+                 metal_band_range=(0.06, 0.45)):
         super().__init__()
         self.light_model = light
         self.materials = materials
@@ -71,6 +74,8 @@ class PhotoModel(LightModel):
         self.albedo_prior = float(albedo_prior)
         self.albedo_prior_mean = float(albedo_prior_mean)
         self.albedo_prior_average = str(albedo_prior_average)
+        self.metal_band = float(metal_band)
+        self.metal_band_range = tuple(float(b) for b in metal_band_range)
 
     @property
     def resolution(self):
@@ -89,6 +94,8 @@ class PhotoModel(LightModel):
         if self.albedo_prior > 0:
             terms["albedo_prior"] = self.albedo_prior * self.materials.albedo_prior(self.albedo_prior_mean,
                                                                                  self.albedo_prior_average)
+        if self.metal_band > 0:
+            terms["metal_band"] = self.metal_band * self.materials.metal_band_term(self.metal_band_range)
         return terms
 
     def describe(self):
@@ -353,7 +360,9 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
         shapes.update(object_shapes(shadow.meshes, transform,
                                     {lab: receivers.bsdf(lab) for lab in receivers.labels}, kind="receiver"))
     photo_model = PhotoModel(light, materials, config.albedo_prior if light_is_free else 0.0,
-                             config.albedo_prior_mean, config.albedo_prior_average, receivers=receivers)
+                             config.albedo_prior_mean, config.albedo_prior_average, receivers=receivers,
+                             metal_band=config.metal_band if light_is_free else 0.0,
+                             metal_band_range=tuple(config.metal_band_range))
     sensor = photo_sensor(geometry.intrinsics, transform)
     escene = EmitterScene(light.kind, light.resolution, objects=shapes,
                           sensor=sensor, integrator={"type": "prb", "max_depth": int(config.max_depth)})

@@ -122,6 +122,26 @@ class ObjectMaterials(torch.nn.Module):
             raise RoomlightError(f"albedo prior: unknown average {average!r}; choose geometric or arithmetic")
         return (dielectric * log_ratio.square()).mean()
 
+    def metal_band_term(self, band=(0.06, 0.45)) -> torch.Tensor:
+        """Mean over the objects of metallic * d^2, d the log-distance of the object's mean albedo a from
+        the nearer edge of ``band`` when a lies inside it (0 outside).
+
+        A metal's base colour is its reflectance at normal incidence, and every pure metal reflects at
+        least about half the light (titanium, chromium, iron 0.50-0.56 averaged over R, G, B; silver,
+        aluminium 0.9); a specular-only surface reflecting a few per cent is a dielectric's clear coat
+        (F0 0.02-0.05). A fitted "metal" in between exists only because the fit traded its albedo against
+        the light (a black glossy object read as a grey metal under a light several times too dim). The
+        term pushes such an object out of the band by the shorter way, or towards a dielectric: its
+        gradient reaches the albedo and the metallic value alike. A scalar tensor, 0 without objects.
+        """
+        if not self.labels:
+            return self.logits.sum() * 0.0
+        v = self.values()
+        lo, hi = (math.log(float(b)) for b in band)
+        log_a = torch.log(v[:, :3].mean(dim=1).clamp_min(1e-6))
+        inside = torch.minimum(log_a - lo, hi - log_a).clamp_min(0)
+        return (v[:, 4] * inside.square()).mean()
+
     def scene_values(self) -> dict[str, torch.Tensor]:
         """Each object's BSDF parameters by their ``mi.traverse`` key."""
         v = self.values()
