@@ -111,6 +111,10 @@ class RoomSurface:
     def __len__(self) -> int:
         return len(self.points)
 
+    def where(self, keep: torch.Tensor) -> RoomSurface:
+        """The points where the (N,) bool ``keep`` holds."""
+        return RoomSurface(self.points[keep], self.normals[keep], self.radiance[keep])
+
 
 def pool_emitter(radiance: torch.Tensor, depth: torch.Tensor | None, height: int):
     """Radiance (H, W, 3) and depth (H, W) pooled to ``height`` rows (solid-angle weighted)."""
@@ -219,7 +223,7 @@ def room_albedo_term(radiance: torch.Tensor, depth: torch.Tensor | None, surface
     keep = surface.radiance.amax(-1) < tau
     if not bool(keep.any()):
         return radiance.sum() * 0.0
-    sub = RoomSurface(surface.points[keep], surface.normals[keep], surface.radiance[keep])
+    sub = surface.where(keep)
     log_a = torch.log(apparent_albedo(radiance, depth, sub).clamp_min(1e-12))
     lo, hi = (math.log(float(a)) for a in albedo_range)
     v = (log_a - hi).clamp_min(0).square() + (lo - log_a).clamp_min(0).square()
@@ -258,7 +262,7 @@ def level_bracket(radiance: torch.Tensor, depth: torch.Tensor | None, surface: R
     keep = (peak < tau) & (peak > 0)
     if not bool(keep.any()):
         return None
-    sub = RoomSurface(surface.points[keep], surface.normals[keep], surface.radiance[keep])
+    sub = surface.where(keep)
     with torch.no_grad():
         a = apparent_albedo(radiance.detach(), None if depth is None else depth.detach(), sub)
     q_lo, q_hi = (float(v) for v in torch.quantile(a.double().cpu(), torch.tensor([trim, 1 - trim], dtype=torch.float64)))
