@@ -361,3 +361,14 @@ def test_a_record_names_the_threads_and_policy_it_was_made_with(monkeypatch):
     rec = variant.thread_record()
     assert rec["policy"] == "auto" and rec["deterministic"] is True
 
+
+
+def test_one_parser_reads_a_thread_request_for_the_option_and_the_environment():
+    from roomlight.cli.threads import AUTO, parse_thread_request
+
+    assert parse_thread_request("3") == 3 and parse_thread_request(" 12 ") == 12
+    assert parse_thread_request(" Auto ") == AUTO and parse_thread_request(2) == 2
+    for bad, why in (("0", "not a positive"), ("-2", "not a positive"), ("2.5", "neither"), ("", "neither"),
+                     ("many", "neither")):
+        with pytest.raises(ValueError, match=why):
+            parse_thread_request(bad)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from roomlight.cli.threads import AUTO, apply_thread_policy, default_threads, prepare_environment
+from roomlight.cli.threads import apply_thread_policy, default_threads, parse_thread_request, prepare_environment
 
 prepare_environment()  # passive OpenMP waiting: before anything imports torch
 
@@ -18,16 +18,10 @@ class ThreadCount(click.ParamType):
     name = "threads"
 
     def convert(self, value, param, ctx):
-        text = str(value).strip()
-        if text.lower() == AUTO:
-            return AUTO
         try:
-            n = int(text)
-        except ValueError:
-            self.fail(f"{value!r} is neither a positive whole number nor {AUTO!r}", param, ctx)
-        if n < 1:
-            self.fail(f"{n} is not a positive number of threads", param, ctx)
-        return n
+            return parse_thread_request(value)
+        except ValueError as e:
+            self.fail(str(e), param, ctx)
 
 
 @click.group(cls=RoomlightGroup, context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})

@@ -59,22 +59,33 @@ def _requested(option: int | str | None) -> str:
     return str(option).strip() if option is not None else os.environ.get(ENV_THREADS, "").strip()
 
 
+def parse_thread_request(text: str) -> int | str:
+    """A thread request as written (``--threads`` or ``$ROOMLIGHT_THREADS``): a positive whole number, or
+    :data:`AUTO`. Raises ValueError, with a message for the user, on anything else."""
+    raw = str(text).strip()
+    if raw.lower() == AUTO:
+        return AUTO
+    try:
+        n = int(raw)
+    except ValueError:
+        raise ValueError(f"{text!r} is neither a positive whole number nor {AUTO!r}") from None
+    if n < 1:
+        raise ValueError(f"{n} is not a positive number of threads")
+    return n
+
+
 def thread_count(option: int | str | None = None) -> int:
     """``option``, else ``$ROOMLIGHT_THREADS``, else :func:`available_cpus`; ``auto`` (either way) is
     :func:`measured_threads`, the CPUs less those other processes keep busy now."""
     raw = _requested(option)
     if not raw:
         return available_cpus()
-    if raw.lower() == AUTO:
-        return measured_threads()
     try:
-        n = int(raw)
-        if n < 1:
-            raise ValueError
+        request = parse_thread_request(raw)
     except ValueError:
         where = "--threads" if option is not None else ENV_THREADS
         raise RoomlightError(f"{where}={raw!r}: expected a positive whole number of threads, or 'auto'") from None
-    return n
+    return measured_threads() if request == AUTO else request
 
 
 def apply_thread_policy(option: int | str | None = None) -> int | None:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from roomlight.core.color import luminance_np
 from roomlight.errors import RoomlightError
 from roomlight.fitting.insert.fitted import FittedPhoto
 from roomlight.fitting.insert.objects import InsertSpec, PlacedObject, place_object
@@ -83,10 +84,6 @@ class LocalGeometry:
     faces: np.ndarray
     uv: np.ndarray
     objects: dict = field(default_factory=dict)
-
-
-def _luminance(x: np.ndarray) -> np.ndarray:
-    return x @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
 
 
 class _LocalScene:
@@ -224,8 +221,8 @@ def _unseen_shares(local: _LocalScene, fitted: FittedPhoto, placed, albedo, extr
     shares = []
     for p in placed:
         own = _coverage(local, [p]) > 0.5
-        total = float(_luminance(with_obj)[own].sum())
-        shares.append(None if not own.any() or total <= 0 else round(float(_luminance(unseen)[own].sum()) / total, 4))
+        total = float(luminance_np(with_obj)[own].sum())
+        shares.append(None if not own.any() or total <= 0 else round(float(luminance_np(unseen)[own].sum()) / total, 4))
     return shares
 
 
@@ -374,7 +371,7 @@ def composite_objects(fitted: FittedPhoto, placed: list[PlacedObject], size: int
     a = cov[..., None]
     composite = np.maximum(a * with_obj + (1.0 - a) * (photo + (with_obj - without)), 0.0).astype(np.float32)
     eps = 1e-4
-    shadow = (_luminance(with_obj) + eps) / (_luminance(without) + eps)
+    shadow = (luminance_np(with_obj) + eps) / (luminance_np(without) + eps)
     shadow = np.where(cov > 0, 1.0, shadow).astype(np.float32)
     timings["composite"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
