@@ -1,20 +1,23 @@
-"""Is the fitted light's fault its level, its contrast, or neither? Re-render its probes under both changes.
+"""Is the fitted light's fault its level, its contrast, its sharpness, or none? Re-render its probes under each change.
 
-A photo benchmark run keeps each fitted light (``recovered.exr``). This script changes the light in two
-ways that need no new fit and scores the probes again (the benchmark's renders and scores, 64 spp):
+A photo benchmark run keeps each fitted light (``recovered.exr``). This script changes the light in ways
+that need no new fit and scores the probes again (the benchmark's renders and scores, 64 spp):
 
-- **contrast**: every texel's luminance ``Y`` becomes ``Y ** gamma`` (colour kept: the RGB triple is scaled
-  by ``Y ** (gamma - 1)``). ``gamma < 1`` lifts the dim walls against the lamps, ``gamma > 1`` the reverse;
+- **contrast** (``--gammas``): every texel's luminance ``Y`` becomes ``Y ** gamma`` (colour kept: the RGB
+  triple is scaled by ``Y ** (gamma - 1)``). ``gamma < 1`` lifts the dim walls against the lamps,
+  ``gamma > 1`` the reverse;
+- **blur** (``--blurs``, degrees): the radiance blurred by a Gaussian of that angular standard deviation,
+  a stand-in for the mean over the layouts the unseen room might have (the depth is kept);
 - **level**: the re-rendered probes are scaled (a probe render is linear in the light) either back to the
   diffuse probes' mean of the light as fitted (``level kept``: only the contrast changed) or to the true
   diffuse probes' mean (``true level``: the exposure oracle of ``scripts/photo_brightness.py``).
 
-Per run and gamma it prints the PSNR LDR of the diffuse, matte and mirror probes and, paired per photo
+Per run and change it prints the PSNR LDR of the diffuse, matte and mirror probes and, paired per photo
 against the light as fitted, the mean difference with its bootstrap interval. If the mirror probes gain
 from neither change, what they lack is where the unseen room's light is, not how bright or how contrasty.
 
-Run: .venv/bin/python scripts/light_contrast.py RUN [RUN ...] [--method prior] [--gammas 1,0.85,1.15]
-         [--json FILE]
+Run: .venv/bin/python scripts/light_contrast.py RUN [RUN ...] [--method prior] [--gammas 0.85,1.15]
+         [--blurs 5,10,20] [--json FILE]
      (RUN: a `roomlight bench run-photos` folder whose cases still hold recovered.exr)
 """
 
@@ -43,8 +46,44 @@ def contrast_changed(radiance: np.ndarray, gamma: float) -> np.ndarray:
     return (rad * gain[..., None]).astype(np.float32)
 
 
-def case_scores(folder: Path, gammas: list[float], spp: int = 64) -> dict:
-    """``{gamma: {level: {material: psnr_ldr}}}`` for one fitted case folder (``cases/ID/METHOD``)."""
+def blurred(radiance: np.ndarray, degrees: float) -> np.ndarray:
+    """(H, 2H, 3) equirectangular radiance blurred by a Gaussian of ``degrees`` angular standard deviation.
+
+    Separable and approximate on the sphere: down the columns with the angle's width in rows (edges
+    repeated at the poles), then along each row, periodically, with the width divided by the cosine of
+    that row's latitude (a row's pixels are that much closer together on the sphere). Energy is kept to
+    the rounding of the kernels; zero ``degrees`` returns the input.
+    """
+    rad = np.asarray(radiance, np.float64)
+    if degrees <= 0:
+        return rad.astype(np.float32)
+    h, w, _ = rad.shape
+    sigma = np.deg2rad(degrees)
+    rows = sigma / (np.pi / h)
+    reach = int(np.ceil(3 * rows))
+    kernel = np.exp(-0.5 * (np.arange(-reach, reach + 1) / rows) ** 2)
+    kernel /= kernel.sum()
+    padded = np.pad(rad, ((reach, reach), (0, 0), (0, 0)), mode="edge")
+    out = sum(k * padded[j:j + h] for j, k in enumerate(kernel))
+    latitude = (0.5 - (np.arange(h) + 0.5) / h) * np.pi
+    columns = np.minimum(sigma / (2 * np.pi / w) / np.maximum(np.cos(latitude), 1e-3), 4 * w)
+    frequency = np.fft.fftfreq(w)
+    transfer = np.exp(-2 * np.pi ** 2 * columns[:, None] ** 2 * frequency[None, :] ** 2)  # (h, w)
+    out = np.fft.ifft(np.fft.fft(out, axis=1) * transfer[..., None], axis=1).real
+    return np.maximum(out, 0.0).astype(np.float32)
+
+
+def changes(gammas: list[float], blurs: list[float]) -> dict:
+    """``{label: function of the radiance}``, the light as fitted (``as fitted``) first."""
+    out = {"as fitted": lambda rad: np.asarray(rad, np.float32)}
+    out.update({f"gamma {g:g}": (lambda rad, g=g: contrast_changed(rad, g)) for g in gammas if g != 1.0})
+    out.update({f"blur {d:g}°": (lambda rad, d=d: blurred(rad, d)) for d in blurs if d > 0})
+    return out
+
+
+def case_scores(folder: Path, variants: dict, spp: int = 64) -> dict:
+    """``{label: {level: {material: psnr_ldr}}}`` for one fitted case folder (``cases/ID/METHOD``), one entry
+    per change of :func:`changes` (the first: the light as fitted)."""
     from roomlight.core.io import read_panorama
     from roomlight.core.light import Light
     from roomlight.evaluation.harness.metrics import score_view
@@ -58,16 +97,26 @@ def case_scores(folder: Path, gammas: list[float], spp: int = 64) -> dict:
     true_mean = float(truth.probe_images["diffuse"][inside].mean())
     fitted_mean = None
     out = {}
-    for gamma in [1.0] + [g for g in gammas if g != 1.0]:
-        light = Light(contrast_changed(pano.radiance, gamma), pano.depth, kind, frame)
+    for label, change in variants.items():
+        light = Light(change(pano.radiance), pano.depth, kind, frame)
         renders: dict = {}
         score_light(truth, light, spp, renders=renders, given_depth=True)
         mean = max(float(renders["diffuse"][inside].mean()), 1e-12)
-        fitted_mean = mean if gamma == 1.0 else fitted_mean
-        out[gamma] = {level: {m: score_view(renders[m] * target / mean, truth.probe_images[m], inside)["psnr_ldr"]
+        fitted_mean = mean if fitted_mean is None else fitted_mean
+        out[label] = {level: {m: score_view(renders[m] * target / mean, truth.probe_images[m], inside)["psnr_ldr"]
                               for m in MATERIALS}
                       for level, target in zip(LEVELS, (fitted_mean, true_mean))}
     return out
+
+
+def _numbers(text: str, option: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        sys.exit(f"error: {option} {text!r}: give numbers separated by commas")
+    if any(v < 0 for v in values):
+        sys.exit(f"error: {option}: no number may be negative")
+    return values
 
 
 def main(argv=None) -> None:
@@ -76,37 +125,36 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", type=Path)
     ap.add_argument("--method", default="prior")
-    ap.add_argument("--gammas", default="1,0.85,1.15,1.3", help="luminance exponents (1: the light as fitted)")
+    ap.add_argument("--gammas", default="0.85,1.15,1.3", help="luminance exponents (1: the light as fitted)")
+    ap.add_argument("--blurs", default="", help="blur widths, degrees (angular standard deviation)")
     ap.add_argument("--json", type=Path, help="also write the per-photo scores here")
     args = ap.parse_args(argv)
-    try:
-        gammas = sorted({1.0, *(float(g) for g in args.gammas.split(",") if g)})
-    except ValueError:
-        sys.exit(f"error: --gammas {args.gammas!r}: give numbers separated by commas")
-    if any(g <= 0 for g in gammas):
+    gammas = _numbers(args.gammas, "--gammas")
+    if 0.0 in gammas:
         sys.exit("error: --gammas: every exponent must be positive")
+    variants = changes(gammas, _numbers(args.blurs, "--blurs"))
     everything = {}
     for run in args.runs:
         cases = sorted(p / args.method for p in (run / "cases").glob("*") if (p / args.method / "recovered.exr").is_file())
         if not cases:
             sys.exit(f"error: {run}: no case with {args.method}/recovered.exr (a `bench run-photos` folder?)")
-        per_photo = {c.parent.name: case_scores(c, gammas) for c in cases}
-        everything[str(run)] = {p: {str(g): v for g, v in s.items()} for p, s in per_photo.items()}
+        per_photo = {c.parent.name: case_scores(c, variants) for c in cases}
+        everything[str(run)] = per_photo
         print(f"\n{run} ({len(per_photo)} photos), PSNR LDR diffuse / matte / mirror; paired against the light as fitted")
-        print("| gamma | level | probes | diffuse | matte | mirror |")
-        print("|:---:|---|:---:|:---:|:---:|:---:|")
-        for gamma in gammas:
+        print("| change | level | probes | diffuse | matte | mirror |")
+        print("|---|---|:---:|:---:|:---:|:---:|")
+        base = np.array([[s["as fitted"][LEVELS[0]][m] for m in MATERIALS] for s in per_photo.values()])
+        for label in variants:
             for level in LEVELS:
-                values = np.array([[s[gamma][level][m] for m in MATERIALS] for s in per_photo.values()])
-                base = np.array([[s[1.0][LEVELS[0]][m] for m in MATERIALS] for s in per_photo.values()])
+                values = np.array([[s[label][level][m] for m in MATERIALS] for s in per_photo.values()])
                 cells = []
                 for j in range(len(MATERIALS)):
                     d = values[:, j] - base[:, j]
                     lo, hi = bootstrap_mean_interval(d)
                     cells.append("—" if not d.any() else f"{d.mean():+.2f} [{lo:+.2f}, {hi:+.2f}]")
-                print(f"| {gamma:g} | {level} | {' / '.join(f'{v:.2f}' for v in values.mean(0))} | " + " | ".join(cells) + " |")
+                print(f"| {label} | {level} | {' / '.join(f'{v:.2f}' for v in values.mean(0))} | " + " | ".join(cells) + " |")
     if args.json:
-        args.json.write_text(json.dumps(everything, indent=1))
+        args.json.write_text(json.dumps(everything, indent=1, ensure_ascii=False))
 
 
 if __name__ == "__main__":

@@ -55,14 +55,40 @@ def test_scores_at_the_fitted_and_at_the_true_level(tmp_path, monkeypatch):
 
     monkeypatch.setattr("roomlight.evaluation.photobench.scoring.load_truth", lambda case_dir: truth)
     monkeypatch.setattr("roomlight.evaluation.photobench.scoring.score_light", fake_score_light)
-    scores = script.case_scores(folder, [1.0, 0.7])
+    scores = script.case_scores(folder, script.changes([1.0, 0.7], [10.0]))
     inside = mask > 0
     level = float(radiance.mean())
     for m in script.MATERIALS:
         as_fitted = images[m] * level * (0.5 if m == "diffuse" else 1.0)
-        assert scores[1.0]["level kept"][m] == pytest.approx(score_view(as_fitted, images[m], inside)["psnr_ldr"])
+        assert scores["as fitted"]["level kept"][m] == pytest.approx(score_view(as_fitted, images[m], inside)["psnr_ldr"])
         # a contrast change is scaled back to the fitted diffuse mean: with this renderer, the same images
-        assert scores[0.7]["level kept"][m] == pytest.approx(scores[1.0]["level kept"][m], rel=1e-5)
-    assert scores[1.0]["true level"]["diffuse"] > 90                     # exact: PSNR of a perfect render
-    assert scores[1.0]["true level"]["mirror"] == pytest.approx(
+        for label in ("gamma 0.7", "blur 10°"):
+            assert scores[label]["level kept"][m] == pytest.approx(scores["as fitted"]["level kept"][m], rel=1e-5)
+    assert scores["as fitted"]["true level"]["diffuse"] > 90                     # exact: PSNR of a perfect render
+    assert scores["as fitted"]["true level"]["mirror"] == pytest.approx(
         score_view(2.0 * images["mirror"], images["mirror"], inside)["psnr_ldr"], rel=1e-5)
+
+
+def test_a_blur_keeps_a_uniform_light_and_the_energy_and_spreads_a_spot_by_its_width():
+    """Against the obvious: a constant panorama is unchanged, the solid-angle-weighted energy of a random one is
+    kept, and a point at the equator spreads over about the asked angle (its standard deviation measured
+    along the row and down the column)."""
+    script = load_script("light_contrast")
+    h, w = 90, 180
+    flat = np.full((h, w, 3), 0.7, np.float32)
+    assert script.blurred(flat, 10.0) == pytest.approx(flat, rel=1e-5)
+    rng = np.random.default_rng(2)
+    rad = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
+    weight = np.cos((0.5 - (np.arange(h) + 0.5) / h) * np.pi)[:, None, None]
+    assert float((script.blurred(rad, 8.0) * weight).sum()) == pytest.approx(float((rad * weight).sum()), rel=0.02)
+    spot = np.zeros((h, w, 3), np.float32)
+    spot[h // 2, w // 2] = 1.0
+    out = script.blurred(spot, 6.0)[..., 0]
+    degrees_per_pixel = 180.0 / h
+    along = out[h // 2] / out[h // 2].sum()
+    down = out[:, w // 2] / out[:, w // 2].sum()
+    x = (np.arange(w) - w // 2) * degrees_per_pixel
+    y = (np.arange(h) - h // 2) * degrees_per_pixel
+    assert np.sqrt((along * x ** 2).sum()) == pytest.approx(6.0, rel=0.05)
+    assert np.sqrt((down * y ** 2).sum()) == pytest.approx(6.0, rel=0.05)
+    assert script.blurred(rad, 0.0) == pytest.approx(rad)
