@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import torch
 
 from roomlight.core.emitter.area_light import build_area_light
@@ -67,3 +68,59 @@ def test_floor_passes_gradient_where_the_room_is_already_larger():
     floor = depth_floor(torch.tensor([[0.0, 0.0, -1.0]]), (8, 16))
     apply_floor(depth, floor).sum().backward()
     assert bool((depth.grad == 1).all())
+
+
+def test_a_cell_only_floor_lifts_the_points_own_cell_and_the_vertex_there_is_beyond_it():
+    """neighbours=False: the need of a point lands in its own cell alone; on a 1 m room, every point's own cell
+    centre (a mesh vertex) is then at least the point's distance away, while the enclosing floor's guarantee
+    (the ray leaves the point before it meets the mesh) no longer holds for all of them."""
+    floor = depth_floor(torch.tensor([[0.0, 0.0, -2.0]]), (8, 16), margin=0.1, relative=0.0, neighbours=False)
+    rows, cols = torch.nonzero(floor > 0, as_tuple=True)
+    assert rows.tolist() == [4] and cols.tolist() == [0] and float(floor[4, 0]) == np.float32(2.1)
+    h, w = 16, 32
+    rng = np.random.default_rng(1)
+    dirs = rng.normal(size=(400, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    dist = rng.uniform(0.5, 3.0, size=400)
+    points = torch.from_numpy(dirs * dist[:, None])
+    cell_floor = depth_floor(points, (h, w), relative=0.0, neighbours=False)
+    spread = depth_floor(points, (h, w), relative=0.0)
+    assert bool((cell_floor <= spread).all()) and float(cell_floor.sum()) < float(spread.sum())
+    v = np.arctan2(np.hypot(dirs[:, 0], dirs[:, 2]), dirs[:, 1]) / np.pi
+    u = np.mod(np.arctan2(dirs[:, 0], -dirs[:, 2]) / (2 * np.pi), 1.0)
+    own = cell_floor.numpy()[np.minimum((v * h).astype(int), h - 1), np.minimum((u * w).astype(int), w - 1)]
+    assert np.all(own >= np.float32(dist) * (1 - 1e-6))
+    lifted = apply_floor(torch.full((h, w), 1.0), cell_floor)
+    mesh = build_area_light(torch.ones(h, w, 3), lifted)
+    hits = _first_hits(mesh.vertices.double().numpy(), mesh.faces.numpy(), dirs)
+    assert np.mean(hits > dist) < 1.0                         # some rays meet a nearer neighbour's triangle first
+
+
+def test_the_floor_of_two_point_sets_is_the_larger_of_their_floors():
+    """The photo fit floors the objects (with their margin) and the visible room apart and keeps the larger:
+    with the enclosing floor for both this is the floor of all the points at once."""
+    rng = np.random.default_rng(4)
+    a, b = (torch.from_numpy(rng.normal(size=(n, 3)) * 2.0) for n in (50, 70))
+    margin = torch.from_numpy(np.concatenate([np.full(50, 0.1), np.zeros(70)]))
+    together = depth_floor(torch.cat([a, b]), (16, 32), margin)
+    apart = torch.maximum(depth_floor(a, (16, 32), 0.1), depth_floor(b, (16, 32)))
+    assert torch.equal(together, apart)
+    assert torch.equal(depth_floor(torch.zeros(0, 3, dtype=torch.float64), (16, 32)), torch.zeros(16, 32))
+
+
+def test_the_photo_fit_floors_objects_over_their_neighbours_and_the_seen_room_as_asked():
+    """containment_floor: an object's vertex always lifts the 3 x 3 cells around it (with the margin); a point of
+    the visible room lifts them too by default and only its own cell with surface_floor=cell."""
+    from roomlight.fitting.photo.config import photo_config
+    from roomlight.fitting.photo.fitter import containment_floor
+
+    surface = np.array([[0.0, 0.0, -2.0]])                 # straight ahead: row 4, column 0 of 8 x 16
+    objects = np.array([[0.0, 0.0, 1.0]])                  # straight behind: row 4, column 8
+    contained = (surface, objects, np.array([0.0, 0.1]))
+    for setting, surface_cells in (("neighbours", 9), ("cell", 1)):
+        config = photo_config("fast", surface_floor=setting)
+        floor = containment_floor(contained, (8, 16), config)
+        ahead, behind = floor[:, [15, 0, 1]], floor[:, 7:10]
+        assert int((ahead > 0).sum()) == surface_cells and float(floor[4, 0]) == pytest.approx(2.0 * 1.02)
+        assert int((behind > 0).sum()) == 9 and float(floor[4, 8]) == pytest.approx(1.0 * 1.02 + 0.1)
+        assert int((floor > 0).sum()) == surface_cells + 9

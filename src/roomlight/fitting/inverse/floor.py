@@ -31,7 +31,7 @@ FLOOR_RELATIVE = 0.02
 
 
 def depth_floor(points: torch.Tensor, resolution: tuple[int, int], margin=0.0,
-                relative: float = FLOOR_RELATIVE) -> torch.Tensor:
+                relative: float = FLOOR_RELATIVE, neighbours: bool = True) -> torch.Tensor:
     """(H, W) float32 floor F (module docstring); 0 where no point constrains the cell.
 
     Args:
@@ -39,6 +39,9 @@ def depth_floor(points: torch.Tensor, resolution: tuple[int, int], margin=0.0,
         resolution: (H, W) of the emitter's depth map.
         margin: metres added to every point's distance: a number, or (M,) per point.
         relative: the relative clearance.
+        neighbours: spread each point's need over the 3 x 3 cells around its own (the guarantee of the
+            module docstring); False: its own cell only, so that the vertex at the cell's centre is beyond the
+            point but a triangle's edge towards a nearer neighbour may pass in front of it.
     """
     h, w = (int(v) for v in resolution)
     q = torch.as_tensor(points, dtype=torch.float64).reshape(-1, 3)
@@ -50,6 +53,8 @@ def depth_floor(points: torch.Tensor, resolution: tuple[int, int], margin=0.0,
     cell = (v * h).floor().long().clamp(0, h - 1) * w + (u * w).floor().long().clamp(0, w - 1)
     floor = torch.zeros(h * w, dtype=torch.float64)
     floor.scatter_reduce_(0, cell, need, reduce="amax", include_self=True)
+    if not neighbours:
+        return floor.reshape(h, w).float()
     grown = F.max_pool2d(spherical_pad(floor.reshape(1, 1, h, w), 1), 3, stride=1)
     return grown[0, 0].float()
 

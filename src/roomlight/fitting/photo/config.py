@@ -48,6 +48,7 @@ class PhotoFitConfig(FitConfig):
     frustum_points: int = 512             #: free-space points in the view frustum for the repulsion term
     free_space_fraction: float = 0.9      #: free-space points lie up to this fraction of each pixel's distance
     contain: bool = True                  #: a floor under the 2.5D light's depth keeps that free space and the objects inside
+    surface_floor: str = "neighbours"     #: that floor under the visible room: neighbours (every point enclosed) or cell (its own cell only)
     init: str = "auto"                    #: start of z: view (view encoder), samples (paper), zero; auto = view if the prior has one
     init_samples: int = 16                #: N(0, I) draws; the one with the largest room starts the fit
     placement_steps: int = 200            #: steps placing the camera and objects inside the initial room
@@ -88,6 +89,7 @@ class PhotoFitConfig(FitConfig):
             (0 <= self.min_object_fraction < 1, "min_object_fraction must be in [0, 1)"),
             (self.frustum_pixels >= 0 and self.frustum_points >= 0, "frustum_pixels and frustum_points must be >= 0"),
             (0 < self.free_space_fraction < 1, "free_space_fraction must be in (0, 1)"),
+            (self.surface_floor in ("neighbours", "cell"), "surface_floor must be neighbours or cell"),
             (self.init_samples >= 1, "init_samples must be >= 1"),
             (self.init in ("auto", "view", "samples", "zero"), "init must be one of auto, view, samples, zero"),
             (self.placement_steps >= 0, "placement_steps must be >= 0"),

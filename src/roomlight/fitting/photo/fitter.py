@@ -37,7 +37,8 @@ from roomlight.fitting.photo.materials import ObjectMaterials
 from roomlight.fitting.photo.receivers import ShadowReceivers, shadow_receivers
 from roomlight.fitting.photo.room_albedo import RoomSurface, level_bracket, lifted, room_albedo_term
 
-__all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE"]
+__all__ = ["PHOTO_METHODS", "PhotoModel", "PhotoFitter", "PhotoFit", "fit_photo", "STATE_FILE", "containment_floor",
+           "containment_points"]
 
 #: The methods a photograph can be fitted with (:mod:`roomlight.fitting.methods`): the priors' latents, each
 #: shown as a 2.5D area light or at infinity, and the free env map; the start variants of ``prior``
@@ -334,12 +335,9 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
         transform = level_transform(case)
     timings["initialisation"] = time.perf_counter() - t0
 
-    contained = _containment_points(geometry, transform, config) if light.kind == "mesh" else None
+    contained = containment_points(geometry, transform, config) if light.kind == "mesh" else None
     if contained is not None and config.contain and hasattr(light, "depth_floor"):
-        from roomlight.fitting.inverse.floor import depth_floor
-
-        light.depth_floor = depth_floor(torch.from_numpy(np.concatenate(contained[:2])), light.resolution,
-                                        torch.from_numpy(contained[2]))
+        light.depth_floor = containment_floor(contained, light.resolution, config)
 
     if materials is None:
         materials = ObjectMaterials(geometry.labels_present, albedo_range=tuple(config.albedo_range))
@@ -430,7 +428,24 @@ def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, limit: int
     return RoomSurface(transform.points(pts), transform.directions(f.normals[idx]), f.radiance[idx])
 
 
-def _containment_points(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig):
+def containment_floor(contained, resolution: tuple[int, int], config: PhotoFitConfig) -> torch.Tensor:
+    """(H, W) float32 floor under a 2.5D light's depth (:mod:`roomlight.fitting.inverse.floor`) for the points
+    of :func:`_containment_points`.
+
+    The objects always get the enclosing floor (an object poking out of the light renders black); the room
+    the photo shows gets it too by default (``surface_floor`` = ``neighbours``), or only its own cell's
+    (``cell``), so that the light's seen part can lie on the surfaces themselves instead of up to the
+    farthest neighbour's distance behind them.
+    """
+    from roomlight.fitting.inverse.floor import depth_floor
+
+    free, objects, margin = contained
+    floor_objects = depth_floor(torch.from_numpy(objects), resolution, torch.from_numpy(margin[len(free):]))
+    floor_surface = depth_floor(torch.from_numpy(free), resolution, neighbours=config.surface_floor == "neighbours")
+    return torch.maximum(floor_objects, floor_surface)
+
+
+def containment_points(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig):
     """(free-space points, object points, per-point margin) in the room frame that a 2.5D light must
     enclose: every pixel's free space up to the surface it sees, and every object vertex with ``margin``
     to spare."""
