@@ -16,7 +16,7 @@ Per run and change it prints the PSNR LDR of the diffuse, matte and mirror probe
 against the light as fitted, the mean difference with its bootstrap interval. If the mirror probes gain
 from neither change, what they lack is where the unseen room's light is, not how bright or how contrasty.
 
-Run: .venv/bin/python scripts/light_contrast.py RUN [RUN ...] [--method prior] [--gammas 0.85,1.15]
+Run: .venv/bin/python scripts/light_contrast.py RUN [RUN ...] [--method prior] [--gammas 0.85,1.15,1.3]
          [--blurs 5,10,20] [--json FILE]
      (RUN: a `roomlight bench run-photos` folder whose cases still hold recovered.exr)
 """
@@ -46,31 +46,31 @@ def contrast_changed(radiance: np.ndarray, gamma: float) -> np.ndarray:
     return (rad * gain[..., None]).astype(np.float32)
 
 
-def blurred(radiance: np.ndarray, degrees: float) -> np.ndarray:
+def blurred(radiance: np.ndarray, degrees: float, chunk: int = 1024) -> np.ndarray:
     """(H, 2H, 3) equirectangular radiance blurred by a Gaussian of ``degrees`` angular standard deviation.
 
-    Separable and approximate on the sphere: down the columns with the angle's width in rows (edges
-    repeated at the poles), then along each row, periodically, with the width divided by the cosine of
-    that row's latitude (a row's pixels are that much closer together on the sphere). Energy is kept to
-    the rounding of the kernels; zero ``degrees`` returns the input.
+    Exact on the sphere, by brute force: every output texel is the average of all input texels weighted by
+    exp(-theta^2 / (2 sigma^2)) (theta the angle between the two texels' directions) times the input texel's
+    solid angle. A constant map stays constant, and since the kernel depends on the angle alone, the
+    solid-angle-weighted energy is kept to the map's discretisation (tested at the equator and the poles).
+    O((H W)^2): about a second at 64 x 128. Zero ``degrees`` returns the input.
     """
+    from roomlight.core.geometry.equirect import pixel_directions, pixel_solid_angles
+
     rad = np.asarray(radiance, np.float64)
     if degrees <= 0:
         return rad.astype(np.float32)
     h, w, _ = rad.shape
-    sigma = np.deg2rad(degrees)
-    rows = sigma / (np.pi / h)
-    reach = int(np.ceil(3 * rows))
-    kernel = np.exp(-0.5 * (np.arange(-reach, reach + 1) / rows) ** 2)
-    kernel /= kernel.sum()
-    padded = np.pad(rad, ((reach, reach), (0, 0), (0, 0)), mode="edge")
-    out = sum(k * padded[j:j + h] for j, k in enumerate(kernel))
-    latitude = (0.5 - (np.arange(h) + 0.5) / h) * np.pi
-    columns = np.minimum(sigma / (2 * np.pi / w) / np.maximum(np.cos(latitude), 1e-3), 4 * w)
-    frequency = np.fft.fftfreq(w)
-    transfer = np.exp(-2 * np.pi ** 2 * columns[:, None] ** 2 * frequency[None, :] ** 2)  # (h, w)
-    out = np.fft.ifft(np.fft.fft(out, axis=1) * transfer[..., None], axis=1).real
-    return np.maximum(out, 0.0).astype(np.float32)
+    dirs = pixel_directions(h, w).double().numpy().reshape(-1, 3)
+    area = pixel_solid_angles(h, w).double().numpy().reshape(-1)
+    flat = rad.reshape(-1, 3)
+    two_sigma2 = 2.0 * np.deg2rad(degrees) ** 2
+    out = np.empty_like(flat)
+    for start in range(0, len(dirs), chunk):
+        angle = np.arccos(np.clip(dirs[start:start + chunk] @ dirs.T, -1.0, 1.0))     # (chunk, H W)
+        weight = np.exp(-angle ** 2 / two_sigma2) * area[None, :]
+        out[start:start + chunk] = (weight @ flat) / weight.sum(axis=1, keepdims=True)
+    return out.reshape(h, w, 3).astype(np.float32)
 
 
 def changes(gammas: list[float], blurs: list[float]) -> dict:
@@ -81,9 +81,10 @@ def changes(gammas: list[float], blurs: list[float]) -> dict:
     return out
 
 
-def case_scores(folder: Path, variants: dict, spp: int = 64) -> dict:
+def case_scores(folder: Path, variants: dict, spp: int = 64, given_depth: bool = True) -> dict:
     """``{label: {level: {material: psnr_ldr}}}`` for one fitted case folder (``cases/ID/METHOD``), one entry
-    per change of :func:`changes` (the first: the light as fitted)."""
+    per change of :func:`changes` (the first: the light as fitted). ``spp`` and ``given_depth`` as the run
+    scored its probes (:func:`~roomlight.evaluation.photobench.scoring.render_probes`)."""
     from roomlight.core.io import read_panorama
     from roomlight.core.light import Light
     from roomlight.evaluation.harness.metrics import score_view
@@ -100,7 +101,7 @@ def case_scores(folder: Path, variants: dict, spp: int = 64) -> dict:
     for label, change in variants.items():
         light = Light(change(pano.radiance), pano.depth, kind, frame)
         renders: dict = {}
-        score_light(truth, light, spp, renders=renders, given_depth=True)
+        score_light(truth, light, spp, renders=renders, given_depth=given_depth)
         mean = max(float(renders["diffuse"][inside].mean()), 1e-12)
         fitted_mean = mean if fitted_mean is None else fitted_mean
         out[label] = {level: {m: score_view(renders[m] * target / mean, truth.probe_images[m], inside)["psnr_ldr"]
@@ -114,13 +115,31 @@ def _numbers(text: str, option: str) -> list[float]:
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         sys.exit(f"error: {option} {text!r}: give numbers separated by commas")
-    if any(v < 0 for v in values):
-        sys.exit(f"error: {option}: no number may be negative")
+    if not all(np.isfinite(v) and v >= 0 for v in values):
+        sys.exit(f"error: {option} {text!r}: every number must be finite and not negative")
     return values
+
+
+def _run_spp(run: Path) -> int:
+    """The probe samples per pixel ``run`` scored with (its run.json; the benchmark's default without one)."""
+    from roomlight.evaluation.photobench.runner import DEFAULT_EVAL_SPP
+
+    record = json.loads((run / "run.json").read_text()) if (run / "run.json").is_file() else {}
+    return int(record.get("eval_spp", DEFAULT_EVAL_SPP))
+
+
+def _case_scores_or_exit(folder: Path, variants: dict, spp: int, given_depth: bool) -> dict:
+    from roomlight.errors import RoomlightError
+
+    try:
+        return case_scores(folder, variants, spp, given_depth)
+    except (RoomlightError, OSError, KeyError, ValueError) as e:
+        sys.exit(f"error: {folder}: {e} (has the photo case moved since the run?)")
 
 
 def main(argv=None) -> None:
     from roomlight.core.stats import bootstrap_mean_interval
+    from roomlight.evaluation.photobench.adapter import PHOTO_FIT_METHODS
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", type=Path)
@@ -138,7 +157,9 @@ def main(argv=None) -> None:
         cases = sorted(p / args.method for p in (run / "cases").glob("*") if (p / args.method / "recovered.exr").is_file())
         if not cases:
             sys.exit(f"error: {run}: no case with {args.method}/recovered.exr (a `bench run-photos` folder?)")
-        per_photo = {c.parent.name: case_scores(c, variants) for c in cases}
+        # fitted through fit-photo, the probes stand where the photo's given depth puts them (as the run scored)
+        given_depth = args.method in PHOTO_FIT_METHODS
+        per_photo = {c.parent.name: _case_scores_or_exit(c, variants, _run_spp(run), given_depth) for c in cases}
         everything[str(run)] = per_photo
         print(f"\n{run} ({len(per_photo)} photos), PSNR LDR diffuse / matte / mirror; paired against the light as fitted")
         print("| change | level | probes | diffuse | matte | mirror |")
@@ -151,7 +172,8 @@ def main(argv=None) -> None:
                 for j in range(len(MATERIALS)):
                     d = values[:, j] - base[:, j]
                     lo, hi = bootstrap_mean_interval(d)
-                    cells.append("—" if not d.any() else f"{d.mean():+.2f} [{lo:+.2f}, {hi:+.2f}]")
+                    same = np.allclose(d, 0.0, atol=1e-6)   # the light as fitted, rescaled to its own level
+                    cells.append("—" if same else f"{d.mean():+.2f} [{lo:+.2f}, {hi:+.2f}]")
                 print(f"| {label} | {level} | {' / '.join(f'{v:.2f}' for v in values.mean(0))} | " + " | ".join(cells) + " |")
     if args.json:
         args.json.write_text(json.dumps(everything, indent=1, ensure_ascii=False))

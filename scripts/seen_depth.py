@@ -25,21 +25,17 @@ import numpy as np
 
 
 def seen_texels(points: np.ndarray, resolution: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """The texels that light-frame ``points`` (N, 3) fall in and the geometric mean distance of each.
+    """The texels that light-frame ``points`` (N, 3) fall in and the geometric mean distance of each (the
+    photo's view lifted onto the light's grid by :func:`roomlight.core.geometry.lift.lift_view`).
 
     Returns ``(flat texel indices (K,), distances (K,))`` for the K texels holding at least one point.
     """
-    import torch
+    from roomlight.core.geometry.lift import lift_view
 
-    from roomlight.core.geometry.equirect import direction_to_uv
-
-    h, w = resolution
-    u, v = direction_to_uv(torch.from_numpy(np.asarray(points, np.float64)))
-    cell = (np.minimum((v.numpy() * h).astype(int), h - 1) * w + np.minimum((u.numpy() * w).astype(int), w - 1))
-    count = np.bincount(cell, minlength=h * w)
-    log_sum = np.bincount(cell, np.log(np.linalg.norm(points, axis=1)), minlength=h * w)
-    hit = np.flatnonzero(count)
-    return hit, np.exp(log_sum[hit] / count[hit])
+    points = np.asarray(points, np.float64)
+    lifted = lift_view(points, np.zeros_like(points), np.eye(3), resolution)
+    hit = np.flatnonzero(lifted.seen.numpy().reshape(-1))
+    return hit, np.exp(lifted.log_depth.double().numpy().reshape(-1)[hit])
 
 
 def case_gap(folder: Path, settings: dict | None = None) -> tuple[np.ndarray, float | None]:
@@ -78,6 +74,8 @@ def case_gap(folder: Path, settings: dict | None = None) -> tuple[np.ndarray, fl
 
 
 def main(argv=None) -> None:
+    from roomlight.errors import RoomlightError
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", type=Path)
     ap.add_argument("--method", default="prior")
@@ -97,7 +95,10 @@ def main(argv=None) -> None:
         print("|---|:---:|:---:|:---:|:---:|")
         medians, shares = [], []
         for folder in folders:
-            gap, share = case_gap(folder, settings)
+            try:
+                gap, share = case_gap(folder, settings)
+            except (RoomlightError, OSError, KeyError, ValueError) as e:
+                sys.exit(f"error: {folder}: {e} (has the photo case moved, or is run.json from another version?)")
             medians.append(float(np.median(gap)))
             shares.append(share)
             cell = "" if share is None else f"{share:.2f}"

@@ -362,7 +362,6 @@ def test_a_record_names_the_threads_and_policy_it_was_made_with(monkeypatch):
     assert rec["policy"] == "auto" and rec["deterministic"] is True
 
 
-
 def test_one_parser_reads_a_thread_request_for_the_option_and_the_environment():
     from roomlight.cli.threads import AUTO, parse_thread_request
 

@@ -93,7 +93,7 @@ def test_a_cell_only_floor_lifts_the_points_own_cell_and_the_vertex_there_is_bey
     lifted = apply_floor(torch.full((h, w), 1.0), cell_floor)
     mesh = build_area_light(torch.ones(h, w, 3), lifted)
     hits = _first_hits(mesh.vertices.double().numpy(), mesh.faces.numpy(), dirs)
-    assert np.mean(hits > dist) < 1.0                         # some rays meet a nearer neighbour's triangle first
+    assert np.any(hits <= dist)                               # some rays meet a nearer neighbour's triangle first
 
 
 def test_the_floor_of_two_point_sets_is_the_larger_of_their_floors():

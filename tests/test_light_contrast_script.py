@@ -70,25 +70,33 @@ def test_scores_at_the_fitted_and_at_the_true_level(tmp_path, monkeypatch):
 
 
 def test_a_blur_keeps_a_uniform_light_and_the_energy_and_spreads_a_spot_by_its_width():
-    """Against the obvious: a constant panorama is unchanged, the solid-angle-weighted energy of a random one is
-    kept, and a point at the equator spreads over about the asked angle (its standard deviation measured
-    along the row and down the column)."""
+    """Against the obvious: a constant panorama is unchanged; the solid-angle-weighted energy of a random map, of
+    a ring next to a pole and of a spot next to the other is kept; a point at the equator spreads over the
+    asked angle (its standard deviation measured along the row and down the column)."""
+    from roomlight.core.geometry.equirect import pixel_solid_angles
+
     script = load_script("light_contrast")
-    h, w = 90, 180
+    h, w = 32, 64
+    area = pixel_solid_angles(h, w).double().numpy()[..., None]
     flat = np.full((h, w, 3), 0.7, np.float32)
     assert script.blurred(flat, 10.0) == pytest.approx(flat, rel=1e-5)
     rng = np.random.default_rng(2)
     rad = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
-    weight = np.cos((0.5 - (np.arange(h) + 0.5) / h) * np.pi)[:, None, None]
-    assert float((script.blurred(rad, 8.0) * weight).sum()) == pytest.approx(float((rad * weight).sum()), rel=0.02)
+    ring = np.zeros((h, w, 3), np.float32)
+    ring[1] = 1.0
     spot = np.zeros((h, w, 3), np.float32)
-    spot[h // 2, w // 2] = 1.0
-    out = script.blurred(spot, 6.0)[..., 0]
+    spot[h - 2, 40] = 1.0
+    for image in (rad, ring, spot):
+        energy = float((image * area).sum())
+        assert float((script.blurred(image, 16.0) * area).sum()) == pytest.approx(energy, rel=0.01)
+    centre = np.zeros((h, w, 3), np.float32)
+    centre[h // 2, w // 2] = 1.0
+    out = script.blurred(centre, 20.0)[..., 0]
     degrees_per_pixel = 180.0 / h
     along = out[h // 2] / out[h // 2].sum()
     down = out[:, w // 2] / out[:, w // 2].sum()
     x = (np.arange(w) - w // 2) * degrees_per_pixel
     y = (np.arange(h) - h // 2) * degrees_per_pixel
-    assert np.sqrt((along * x ** 2).sum()) == pytest.approx(6.0, rel=0.05)
-    assert np.sqrt((down * y ** 2).sum()) == pytest.approx(6.0, rel=0.05)
+    assert np.sqrt((along * x ** 2).sum()) == pytest.approx(20.0, rel=0.05)
+    assert np.sqrt((down * y ** 2).sum()) == pytest.approx(20.0, rel=0.05)
     assert script.blurred(rad, 0.0) == pytest.approx(rad)

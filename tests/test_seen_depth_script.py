@@ -44,3 +44,40 @@ def test_a_light_built_ten_percent_behind_a_photographed_wall_reads_log2_1_1(tmp
     # two points in one texel give their geometric mean distance; a point in another texel its own
     hit, dist = script.seen_texels(np.array([[0.0, 0.0, -2.0], [0.0, 0.0, -8.0], [1.0, 0.0, 0.0]]), (h, w))
     assert len(hit) == 2 and sorted(dist.tolist()) == pytest.approx([1.0, 4.0])   # geometric mean of 2 and 8
+
+
+def test_the_share_at_the_floor_is_rebuilt_from_the_runs_settings(tmp_path):
+    """A light whose depth is the photo fit's own containment floor reads (nearly) all its seen texels at the
+    floor; the same light half as far again reads none; a run without its settings is refused by name."""
+    import torch
+
+    from roomlight.core.io import write_panorama
+    from roomlight.fitting.photo import case as case_mod
+    from roomlight.fitting.photo.config import photo_config
+    from roomlight.fitting.photo.fitter import containment_floor, containment_points
+    from roomlight.fitting.photo.geometry import build_geometry, level_transform
+    from roomlight.fitting.photo.synthetic import example_photo_case
+
+    script = load_script("seen_depth")
+    case_dir = tmp_path / "case"
+    example_photo_case(case_dir, width=96, height=72, spp=8)
+    config = photo_config("fast")
+    case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
+    transform = level_transform(case)
+    floor = containment_floor(containment_points(build_geometry(case, config), transform, config), (32, 64), config)
+    floor = torch.where(floor > 0, floor, torch.full_like(floor, 20.0)).numpy()
+    run = tmp_path / "run"
+    for scale, name in ((1.0, "on"), (1.5, "off")):
+        folder = run / "cases" / name / "prior"
+        folder.mkdir(parents=True)
+        (folder / "result.json").write_text(json.dumps({"case_dir": str(case_dir)}))
+        write_panorama(folder / "recovered.exr", (np.ones((32, 64, 3), np.float32), (scale * floor).astype(np.float32)),
+                       half=False, metadata={"emitter_kind": "mesh", "light_from_camera": transform.matrix.tolist()})
+    settings = {"preset": "fast", "overrides": {}}
+    gap, share = script.case_gap(run / "cases" / "on" / "prior", settings)
+    assert share > 0.9 and len(gap) > 50
+    assert float(np.median(gap)) > 0                  # the floor lies beyond the surfaces it encloses
+    gap_off, share_off = script.case_gap(run / "cases" / "off" / "prior", settings)
+    assert share_off == 0.0 and np.allclose(gap_off, gap + np.log2(1.5), atol=1e-5)
+    with pytest.raises(SystemExit, match="no run.json"):
+        script.main([str(run), "--floor"])

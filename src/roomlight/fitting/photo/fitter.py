@@ -398,6 +398,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
 
         containment = {
             "floor": bool(config.contain and getattr(light, "depth_floor", None) is not None),
+            "surface_floor": config.surface_floor,
             "free_space_points": len(contained[0]), "object_points": len(contained[1]),
             "free_space_outside_share": outside_share(result.depth, torch.from_numpy(contained[0])),
             "objects_outside_share": outside_share(result.depth, torch.from_numpy(contained[1]))}
@@ -430,12 +431,13 @@ def _room_surface(geometry: PhotoGeometry, transform: SceneTransform, limit: int
 
 def containment_floor(contained, resolution: tuple[int, int], config: PhotoFitConfig) -> torch.Tensor:
     """(H, W) float32 floor under a 2.5D light's depth (:mod:`roomlight.fitting.inverse.floor`) for the points
-    of :func:`_containment_points`.
+    of :func:`containment_points`.
 
-    The objects always get the enclosing floor (an object poking out of the light renders black); the room
-    the photo shows gets it too by default (``surface_floor`` = ``neighbours``), or only its own cell's
-    (``cell``), so that the light's seen part can lie on the surfaces themselves instead of up to the
-    farthest neighbour's distance behind them.
+    The objects' vertices always get the enclosing floor (an object poking out of the light renders black);
+    the point every pixel sees (the visible room, and the objects' fronts, which their vertices enclose
+    anyway) gets it too by default (``surface_floor`` = ``neighbours``), or only its own cell's (``cell``),
+    so that the light's seen part can lie on the surfaces themselves instead of up to the farthest
+    neighbour's distance behind them.
     """
     from roomlight.fitting.inverse.floor import depth_floor
 
