@@ -67,7 +67,7 @@ def case_gap(folder: Path, settings: dict | None = None) -> tuple[np.ndarray, fl
 
     config = photo_config(settings["preset"], **settings.get("overrides", {}))
     fitted_case = case_mod.load_photo(record["case_dir"], min_object_fraction=config.min_object_fraction)
-    contained = containment_points(build_geometry(fitted_case, config), SceneTransform.from_matrix(frame), config)
+    contained = containment_points(build_geometry(fitted_case, config), SceneTransform.from_matrix(frame))
     floor = containment_floor(contained, depth.shape, config).double().numpy().reshape(-1)[hit]
     at_floor = (floor > 0) & (np.abs(depth.reshape(-1)[hit] / np.maximum(floor, 1e-12) - 1.0) < 0.01)
     return gap, float(at_floor.mean())

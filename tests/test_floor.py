@@ -116,9 +116,9 @@ def test_the_photo_fit_floors_objects_over_their_neighbours_and_the_seen_room_as
 
     surface = np.array([[0.0, 0.0, -2.0]])                 # straight ahead: row 4, column 0 of 8 x 16
     objects = np.array([[0.0, 0.0, 1.0]])                  # straight behind: row 4, column 8
-    contained = (surface, objects, np.array([0.0, 0.1]))
+    contained = (surface, objects)
     for setting, surface_cells in (("neighbours", 9), ("cell", 1)):
-        config = photo_config("fast", surface_floor=setting)
+        config = photo_config("fast", surface_floor=setting, margin=0.1)
         floor = containment_floor(contained, (8, 16), config)
         ahead, behind = floor[:, [15, 0, 1]], floor[:, 7:10]
         assert int((ahead > 0).sum()) == surface_cells and float(floor[4, 0]) == pytest.approx(2.0 * 1.02)

@@ -64,7 +64,7 @@ def test_the_share_at_the_floor_is_rebuilt_from_the_runs_settings(tmp_path):
     config = photo_config("fast")
     case = case_mod.load_photo(str(case_dir), min_object_fraction=config.min_object_fraction)
     transform = level_transform(case)
-    floor = containment_floor(containment_points(build_geometry(case, config), transform, config), (32, 64), config)
+    floor = containment_floor(containment_points(build_geometry(case, config), transform), (32, 64), config)
     floor = torch.where(floor > 0, floor, torch.full_like(floor, 20.0)).numpy()
     run = tmp_path / "run"
     for scale, name in ((1.0, "on"), (1.5, "off")):

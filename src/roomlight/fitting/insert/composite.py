@@ -218,11 +218,12 @@ def _unseen_shares(local: _LocalScene, fitted: FittedPhoto, placed, albedo, extr
     seen = torch.from_numpy(seen_texels(fitted, local.intrinsics))
     unseen_light = fitted.radiance * (~seen)[..., None].to(fitted.radiance.dtype)
     unseen = local.render(albedo, extra, spp, seed, radiance=unseen_light)
+    whole_y, unseen_y = luminance_np(with_obj), luminance_np(unseen)  # (H, W), once for every object
     shares = []
     for p in placed:
         own = _coverage(local, [p]) > 0.5
-        total = float(luminance_np(with_obj)[own].sum())
-        shares.append(None if not own.any() or total <= 0 else round(float(luminance_np(unseen)[own].sum()) / total, 4))
+        total = float(whole_y[own].sum())
+        shares.append(None if not own.any() or total <= 0 else round(float(unseen_y[own].sum()) / total, 4))
     return shares
 
 

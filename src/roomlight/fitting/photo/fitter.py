@@ -335,7 +335,7 @@ def fit_photo(case, method: str = "prior", config: PhotoFitConfig | None = None,
         transform = level_transform(case)
     timings["initialisation"] = time.perf_counter() - t0
 
-    contained = containment_points(geometry, transform, config) if light.kind == "mesh" else None
+    contained = containment_points(geometry, transform) if light.kind == "mesh" else None
     if contained is not None and config.contain and hasattr(light, "depth_floor"):
         light.depth_floor = containment_floor(contained, light.resolution, config)
 
@@ -441,17 +441,15 @@ def containment_floor(contained, resolution: tuple[int, int], config: PhotoFitCo
     """
     from roomlight.fitting.inverse.floor import depth_floor
 
-    free, objects, margin = contained
-    floor_objects = depth_floor(torch.from_numpy(objects), resolution, torch.from_numpy(margin[len(free):]))
+    free, objects = contained
+    floor_objects = depth_floor(torch.from_numpy(objects), resolution, float(config.margin))
     floor_surface = depth_floor(torch.from_numpy(free), resolution, neighbours=config.surface_floor == "neighbours")
     return torch.maximum(floor_objects, floor_surface)
 
 
-def containment_points(geometry: PhotoGeometry, transform: SceneTransform, config: PhotoFitConfig):
-    """(free-space points, object points, per-point margin) in the room frame that a 2.5D light must
-    enclose: every pixel's free space up to the surface it sees, and every object vertex with ``margin``
-    to spare."""
+def containment_points(geometry: PhotoGeometry, transform: SceneTransform) -> tuple[np.ndarray, np.ndarray]:
+    """(free-space points (N, 3), object points (K, 3)) in the room frame that a 2.5D light must enclose:
+    every pixel's free space up to the surface it sees, and every object vertex (with ``margin`` to spare,
+    :func:`containment_floor`)."""
     free, objects = geometry.contained_points()
-    free, objects = transform.points(free), transform.points(objects)
-    margin = np.concatenate([np.zeros(len(free)), np.full(len(objects), float(config.margin))])
-    return free, objects, margin
+    return transform.points(free), transform.points(objects)
