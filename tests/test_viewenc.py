@@ -375,6 +375,34 @@ def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_
     assert {"irradiance_stops", "irradiance_seen_stops"} <= set(val)
 
 
+def test_the_display_term_adds_its_weight_times_the_error_validations_psnr_ldr_reads(tiny_prior, tmp_path):
+    from roomlight.prior.data.toy import write_toy_dataset
+    from roomlight.prior.eval.metrics import psnr, to_ldr
+    from roomlight.prior.viewenc.config import ViewTrainConfig
+    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
+
+    write_toy_dataset(tmp_path / "data" / "train", 4, height=16)
+    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
+    cfg = ViewTrainConfig(batch_size=2, max_steps=1, val_every=1, ckpt_every=1, val_views=2, log_every=1,
+                          progress=False)
+    run = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None)
+    v = run.val
+    torch.manual_seed(2)
+    z, s = torch.randn(2, tiny_prior.config.latent_dim), torch.zeros(2)
+    seen = v["x"][:, -1] > 0.5
+    off = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
+    run.cfg = cfg.replace(display_weight=2.0)
+    on = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
+    # the metric's own path: per view PSNR LDR of the decoded room, back to its squared error
+    rad_hat, _ = tiny_prior.decode(z)
+    mse = (10.0 ** (-psnr(to_ldr(rad_hat, v["radiance"]), to_ldr(v["radiance"])) / 10.0)).mean()
+    assert float(on["display"]) == pytest.approx(float(mse), rel=1e-4)
+    assert float(off["display"]) == pytest.approx(float(mse), rel=1e-4)      # logged without its weight too
+    assert float(on["total"] - off["total"]) == pytest.approx(2.0 * float(mse), rel=1e-4)
+    with pytest.raises(Exception):
+        ViewTrainConfig(display_weight=-1.0)
+
+
 def test_the_seen_matched_irradiance_term_scales_the_decoded_room_to_the_views_seen_cells(tiny_prior, tmp_path):
     from roomlight.core.geometry.equirect import pixel_solid_angles
     from roomlight.prior.data.toy import write_toy_dataset

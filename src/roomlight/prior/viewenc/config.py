@@ -68,6 +68,11 @@ class ViewTrainConfig(StrictConfig):
     #: (:func:`roomlight.prior.losses.irradiance.seen_matched`): the term then asks for the unseen
     #: part's energy relative to the seen part, the only energy a photo fit's start passes on.
     irradiance_seen_matched: bool = False
+    #: Weight of the squared error of the decoded room's display values against the truth's, both exposed
+    #: at the truth's key (:func:`roomlight.prior.losses.display.display_loss`; validation's ``psnr_ldr`` is
+    #: ``-10 log10`` of it per view): asks for the whole room as its tone-mapped image shows it, the
+    #: unseen lamps' places included. 0 (the bundled encoder's) leaves it out; it is logged either way.
+    display_weight: float = 0.0
     #: Validation views (one per validation room, fixed) and how often they are scored.
     val_views: int = 96
     val_every: int = 250
@@ -84,7 +89,7 @@ class ViewTrainConfig(StrictConfig):
     def __post_init__(self):
         ok = (self.batch_size >= 1 and self.max_steps >= 1 and self.lr > 0 and 0 < self.fov_deg[0] <= self.fov_deg[1] < 170
               and 0 < self.exposure_key[0] <= self.exposure_key[1] and self.occluders >= 0 and self.val_views >= 1
-              and 0.0 <= self.depth_dropout <= 1.0 and self.irradiance_weight >= 0.0)
+              and 0.0 <= self.depth_dropout <= 1.0 and self.irradiance_weight >= 0.0 and self.display_weight >= 0.0)
         if not ok:
             raise RoomlightError(f"view-encoder training settings out of range: {self.to_dict()}")
         LossConfig.from_dict(self.loss)

@@ -4,14 +4,16 @@ Each step draws ``batch_size`` training panoramas, cuts one random view of each
 (:func:`~roomlight.prior.viewenc.views.training_view`), and minimises
 
     L = L_rec(decode(z), X) + latent_weight · mean_d (z_d - mu_d(X))^2 + exposure_weight · (s - s*)^2
-        + irradiance_weight · L_irr(decode(z), X)
+        + irradiance_weight · L_irr(decode(z), X) + display_weight · L_display(decode(z), X)
 
 where X is the whole (z-scored) panorama, L_rec the prior's reconstruction losses (L1, Scharr
 gradients, peak; :func:`roomlight.prior.losses.vae_loss` without its KL term) through the frozen
 decoder, mu(X) the prior encoder's posterior mean of the whole panorama, and L_irr the log-L1 error
 of the irradiance at the capture point (:mod:`roomlight.prior.losses.irradiance`; weight 0 by
 default), with ``irradiance_seen_matched`` taken after the decoded room is scaled to the truth's
-level on the cells the view shows. The prior's weights never change; only the view encoder learns.
+level on the cells the view shows, and L_display the squared error of the two rooms' display values
+(:mod:`roomlight.prior.losses.display`: what validation's ``psnr_ldr`` scores; weight 0 by default).
+The prior's weights never change; only the view encoder learns.
 Validation also reports ``irradiance_stops``, the decoded room's mean log2 irradiance ratio to the
 truth's (negative: the guess is too dim), and ``irradiance_seen_stops``, the same after that scaling:
 the energy bias a photo fit starts with.
@@ -40,6 +42,7 @@ import torch
 
 from roomlight.errors import RoomlightError
 from roomlight.prior.losses import vae_loss
+from roomlight.prior.losses.display import display_loss
 from roomlight.prior.losses.irradiance import irradiance_log_ratio, irradiance_loss
 from roomlight.prior.model.view_encoder import SEEN_CHANNEL, ViewEncoder
 from roomlight.prior.train import checkpoint as ck
@@ -54,7 +57,8 @@ __all__ = ["ViewEncoderTrainer", "load_panoramas", "TERMS"]
 #: The validation scores logged for the two reference starts (z = 0, the whole panorama's encoder mean).
 REFERENCE_SCORES = ("total", "psnr_ldr", "abs_rel", "irradiance_stops", "irradiance_seen_stops")
 
-TERMS = ("total", "l1_radiance", "l1_depth", "grad_radiance", "grad_depth", "peak", "latent", "exposure", "irradiance")
+TERMS = ("total", "l1_radiance", "l1_depth", "grad_radiance", "grad_depth", "peak", "latent", "exposure", "irradiance",
+         "display")
 
 
 def load_panoramas(data_dir, split: str, resolution, limit: int | None = None, note=print
@@ -209,11 +213,14 @@ class ViewEncoderTrainer:
         t = {k: t[k] for k in TERMS if k in t}
         t["latent"] = (z - mean).square().mean()
         t["exposure"] = (s - s_target).square().mean()
-        t["irradiance"] = irradiance_loss(norm.denormalize(x_hat)[0], radiance,
-                                          seen=seen if self.cfg.irradiance_seen_matched else None)
+        rad_hat = norm.denormalize(x_hat)[0]
+        t["irradiance"] = irradiance_loss(rad_hat, radiance, seen=seen if self.cfg.irradiance_seen_matched else None)
+        t["display"] = display_loss(rad_hat, radiance)
         t["total"] = t["total"] + self.cfg.latent_weight * t["latent"] + self.cfg.exposure_weight * t["exposure"]
         if self.cfg.irradiance_weight > 0:
             t["total"] = t["total"] + self.cfg.irradiance_weight * t["irradiance"]
+        if self.cfg.display_weight > 0:
+            t["total"] = t["total"] + self.cfg.display_weight * t["display"]
         return t
 
     def train_step(self) -> dict:
