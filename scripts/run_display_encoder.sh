@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# A view encoder trained with the display term (`train-view-encoder --set display_weight=W`, default W=30:
+# the term then weighs about as much as the L1 radiance term at the bundled encoder's error), against the
+# bundled encoder (same rooms, same schedule, no display term):
+#   1. on the 96 validation views of benchmarks/view_encoder_depth.py (the decoded room against the truth);
+#   2. on validation photos only (bench/wide-val-clean, bench/photos-val8-hr at its 192 x 256 px,
+#      bench/wide-val-realmetal), fit seeds 0 and 1000, each side averaged over the two seeds before pairing.
+# The bundled encoder's runs on those sets are the defaults' records (results/*-mb-default, *-default,
+# *-seed1000). One heavy job at a time; every step resumes. ~25 min of rooms, ~20 of training, ~40 of fits.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/validation_photos.sh   # R, run_validation
+W=${W:-30}
+NAME=disp$W
+RUN=runs/view-encoder-l512-$NAME
+$R synth --n 2400 --res 64x128 --out data/rooms64b --workers 2            # the bundled encoder's rooms
+$R train-view-encoder --model training/prior-l512 --data data/rooms64b --out $RUN \
+    --max-steps 2500 --time-budget 60 --set display_weight=$W
+.venv/bin/python benchmarks/view_encoder_depth.py --data data/rooms64b --views 96 \
+    --encoder bundled=src/roomlight/assets/prior/view_encoder --encoder $NAME=$RUN/best --out results/view-encoder-$NAME.json
+hr=(--set render_size=256 --set geometry_size=512)
+enc=(--view-encoder $RUN/best)
+run_validation wide-val-clean $NAME "${enc[@]}"
+run_validation photos-val8-hr $NAME "${hr[@]}" "${enc[@]}"
+run_validation wide-val-realmetal $NAME "${enc[@]}"
+run_validation wide-val-clean $NAME-seed1000 "${enc[@]}" --set seed=1000
+run_validation photos-val8-hr $NAME-seed1000 "${hr[@]}" "${enc[@]}" --set seed=1000
+run_validation wide-val-realmetal $NAME-seed1000 "${enc[@]}" --set seed=1000
+for pair in "wide-val-clean mb-default lr-seed1000" "photos-val8-hr mb-default seed1000" \
+            "wide-val-realmetal default seed1000"; do
+  set -- $pair
+  echo "== $1: $NAME - bundled encoder (seed 0)"
+  .venv/bin/python scripts/compare_bench_runs.py results/$1-$2 results/$1-$NAME --suffix +$NAME --method prior
+  .venv/bin/python scripts/photo_brightness.py results/$1-$NAME --against results/$1-$2 --methods prior
+  echo "== $1: $NAME - bundled encoder, each averaged over seeds 0 and 1000"
+  .venv/bin/python scripts/compare_bench_runs.py results/$1-$2,results/$1-$3 \
+      results/$1-$NAME,results/$1-$NAME-seed1000 --suffix +$NAME --method prior
+done
