@@ -65,8 +65,20 @@ def test_an_over_exposed_guess_is_pulled_down_where_the_target_does_not_clip_and
     pred.requires_grad_(True)
     display_loss(pred, target).backward()
     assert (pred.grad[0, :, 1, 1] > 0).all()         # descending lowers it
+    # its size: d/dp of (D - d_t)^2 / N with D's slope at the clip, 1 / 2.2, times the exposure k
+    k = 0.18 / math.exp(math.log(1.0 + 1e-6) * 3 / 4 + math.log(1000.0 + 1e-6) / 4)
+    d_t = (k * 1.0) ** (1 / 2.2)
+    expected = 2 * (1.0 - d_t) * (1 / 2.2) * k / 12
+    assert pred.grad[0, :, 1, 1].tolist() == pytest.approx([expected] * 3, rel=1e-6)
     assert (pred.grad[0, :, 0, 0] == 0).all()        # both clip: nothing to learn
     assert torch.isfinite(pred.grad).all()
+
+
+def test_an_image_without_its_batch_axis_is_refused():
+    from roomlight.errors import ShapeError
+
+    with pytest.raises(ShapeError, match="B, 3, H, W"):
+        display_loss(torch.ones(3, 4, 8), torch.ones(3, 4, 8))
 
 
 def test_a_black_guess_has_a_finite_gradient_towards_the_target():

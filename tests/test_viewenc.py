@@ -376,6 +376,7 @@ def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_
 
 
 def test_the_display_term_adds_its_weight_times_the_error_validations_psnr_ldr_reads(tiny_prior, tmp_path):
+    from roomlight.errors import RoomlightError
     from roomlight.prior.data.toy import write_toy_dataset
     from roomlight.prior.eval.metrics import psnr, to_ldr
     from roomlight.prior.viewenc.config import ViewTrainConfig
@@ -399,8 +400,12 @@ def test_the_display_term_adds_its_weight_times_the_error_validations_psnr_ldr_r
     assert float(on["display"]) == pytest.approx(float(mse), rel=1e-4)
     assert float(off["display"]) == pytest.approx(float(mse), rel=1e-4)      # logged without its weight too
     assert float(on["total"] - off["total"]) == pytest.approx(2.0 * float(mse), rel=1e-4)
-    with pytest.raises(Exception):
+    with pytest.raises(RoomlightError, match="out of range"):
         ViewTrainConfig(display_weight=-1.0)
+    # a run saved before the setting existed resumes without the term
+    saved = cfg.to_dict()
+    saved.pop("display_weight")
+    assert ViewTrainConfig.from_dict(saved).display_weight == 0.0
 
 
 def test_the_seen_matched_irradiance_term_scales_the_decoded_room_to_the_views_seen_cells(tiny_prior, tmp_path):
