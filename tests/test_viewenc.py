@@ -339,26 +339,38 @@ def test_an_encoder_trained_for_a_training_run_is_tied_to_its_best_weights(tiny_
     assert PanoVAE.from_pretrained(tmp_path / "run" / "best").view_encoder is not None
 
 
-def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_error(tiny_prior, tmp_path):
-    import json
-
+def _toy_view_trainer(prior, tmp_path, **settings):
+    """(trainer, its settings) of a one-step view-encoder run on a few toy rooms (16 x 32)."""
     from roomlight.prior.data.toy import write_toy_dataset
-    from roomlight.prior.losses.irradiance import irradiance_at_centre
     from roomlight.prior.viewenc.config import ViewTrainConfig
     from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
 
     write_toy_dataset(tmp_path / "data" / "train", 4, height=16)
     write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
     cfg = ViewTrainConfig(batch_size=2, max_steps=1, val_every=1, ckpt_every=1, val_views=2, log_every=1,
-                          progress=False)
-    run = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None)
+                          progress=False, **settings)
+    return ViewEncoderTrainer(cfg, prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None), cfg
+
+
+def _random_guess_terms(run, prior, seed: int):
+    """(z (2, D), the views' seen cells (2, H, W), every loss term) of a random guess for the two validation views."""
     v = run.val
-    torch.manual_seed(1)
-    z, s = torch.randn(2, tiny_prior.config.latent_dim), torch.zeros(2)
+    torch.manual_seed(seed)
+    z, s = torch.randn(2, prior.config.latent_dim), torch.zeros(2)
     seen = v["x"][:, -1] > 0.5
-    off = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
+    return z, seen, run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
+
+
+def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_error(tiny_prior, tmp_path):
+    import json
+
+    from roomlight.prior.losses.irradiance import irradiance_at_centre
+
+    run, cfg = _toy_view_trainer(tiny_prior, tmp_path)
+    v = run.val
+    z, _, off = _random_guess_terms(run, tiny_prior, 1)
     run.cfg = cfg.replace(irradiance_weight=0.5)
-    on = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
+    _, _, on = _random_guess_terms(run, tiny_prior, 1)
     # the term by hand: 14 normals' irradiance, log-L1 per channel
     rad_hat, _ = tiny_prior.decode(z)
     e_hat, e = irradiance_at_centre(rad_hat), irradiance_at_centre(v["radiance"])
@@ -377,23 +389,14 @@ def test_the_irradiance_term_adds_its_weight_times_the_decoded_rooms_irradiance_
 
 def test_the_display_term_adds_its_weight_times_the_error_validations_psnr_ldr_reads(tiny_prior, tmp_path):
     from roomlight.errors import RoomlightError
-    from roomlight.prior.data.toy import write_toy_dataset
     from roomlight.prior.eval.metrics import psnr, to_ldr
     from roomlight.prior.viewenc.config import ViewTrainConfig
-    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
 
-    write_toy_dataset(tmp_path / "data" / "train", 4, height=16)
-    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
-    cfg = ViewTrainConfig(batch_size=2, max_steps=1, val_every=1, ckpt_every=1, val_views=2, log_every=1,
-                          progress=False)
-    run = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None)
+    run, cfg = _toy_view_trainer(tiny_prior, tmp_path)
     v = run.val
-    torch.manual_seed(2)
-    z, s = torch.randn(2, tiny_prior.config.latent_dim), torch.zeros(2)
-    seen = v["x"][:, -1] > 0.5
-    off = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
+    z, _, off = _random_guess_terms(run, tiny_prior, 2)
     run.cfg = cfg.replace(display_weight=2.0)
-    on = run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)
+    _, _, on = _random_guess_terms(run, tiny_prior, 2)
     # the metric's own path: per view PSNR LDR of the decoded room, back to its squared error
     rad_hat, _ = tiny_prior.decode(z)
     mse = (10.0 ** (-psnr(to_ldr(rad_hat, v["radiance"]), to_ldr(v["radiance"])) / 10.0)).mean()
@@ -410,22 +413,13 @@ def test_the_display_term_adds_its_weight_times_the_error_validations_psnr_ldr_r
 
 def test_the_seen_matched_irradiance_term_scales_the_decoded_room_to_the_views_seen_cells(tiny_prior, tmp_path):
     from roomlight.core.geometry.equirect import pixel_solid_angles
-    from roomlight.prior.data.toy import write_toy_dataset
     from roomlight.prior.losses.irradiance import irradiance_at_centre
-    from roomlight.prior.viewenc.config import ViewTrainConfig
-    from roomlight.prior.viewenc.trainer import ViewEncoderTrainer
 
-    write_toy_dataset(tmp_path / "data" / "train", 4, height=16)
-    write_toy_dataset(tmp_path / "data" / "val", 2, height=16, seed=100)
-    cfg = ViewTrainConfig(batch_size=2, max_steps=1, val_every=1, ckpt_every=1, val_views=2, log_every=1,
-                          progress=False, irradiance_weight=1.0, irradiance_seen_matched=True)
-    run = ViewEncoderTrainer(cfg, tiny_prior, tmp_path / "data", tmp_path / "run", note=lambda *_: None)
+    run, _ = _toy_view_trainer(tiny_prior, tmp_path, irradiance_weight=1.0, irradiance_seen_matched=True)
     v = run.val
-    seen = v["x"][:, -1] > 0.5
+    z, seen, terms = _random_guess_terms(run, tiny_prior, 2)
     assert bool(seen.any(-1).any(-1).all()) and not bool(seen.all())
-    torch.manual_seed(2)
-    z, s = torch.randn(2, tiny_prior.config.latent_dim), torch.zeros(2)
-    term = float(run.losses(z, s, v["radiance"], v["depth"], v["mean"], v["s"], seen)["irradiance"])
+    term = float(terms["irradiance"])
     # by hand, in float64: the decoded room scaled so its seen cells' solid-angle weighted mean log
     # luminance is the truth's, then the 14 normals' log-L1
     rad_hat = tiny_prior.decode(z)[0].double()
